@@ -1,0 +1,264 @@
+#include "od/device_dictionary.hpp"
+
+#include <cstdio>
+
+#include "od/can_frame.hpp"
+#include "od/pdo_mapping.hpp"
+
+namespace stepnode::od {
+namespace {
+
+constexpr uint32_t kCobInvalid = 0x80000000;  // bit 31: object does not exist / not valid
+constexpr uint32_t kCobGenerate = 0x40000000;  // bit 30: SYNC producer (0x1005), no RTR (TPDO)
+constexpr uint32_t kCobExtended = 0x20000000;  // bit 29: 29-bit ID (not supported)
+
+using DT = DataType;
+using AC = Access;
+
+uint32_t u32(std::span<const uint8_t> d) { return decode<uint32_t>(d); }
+
+std::string hex_index(const char* fmt, unsigned n) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, fmt, n);
+  return buf;
+}
+
+// COB-ID rules shared by SYNC, EMCY and PDOs: no 29-bit IDs, no restricted IDs, and the
+// CAN-ID of an object that is valid may not change (CiA 301 7.5.2.5, 7.5.2.35).
+SdoAbort check_cob_id(uint32_t current, uint32_t next, uint32_t valid_mask_when_clear) {
+  if (next & kCobExtended) return SdoAbort::InvalidValue;
+  bool next_valid = valid_mask_when_clear ? !(next & valid_mask_when_clear) : true;
+  bool current_valid = valid_mask_when_clear ? !(current & valid_mask_when_clear) : true;
+  uint32_t id = next & 0x7FF;
+  if (next_valid && is_restricted_can_id(id)) return SdoAbort::InvalidValue;
+  if (next_valid && current_valid && (current & 0x7FF) != id) return SdoAbort::InvalidValue;
+  return SdoAbort::None;
+}
+
+void add_identity(Dictionary& od, const DeviceInfo& info) {
+  od.var(0x1000, "Device type", DT::Unsigned32, AC::ReadOnly, encode<uint32_t>(0));
+  od.var(0x1001, "Error register", DT::Unsigned8, AC::ReadOnly, {0}, true);
+  od.var(0x1008, "Manufacturer device name", DT::VisibleString, AC::Const,
+         encode_string(info.device_name));
+  od.var(0x1009, "Manufacturer hardware version", DT::VisibleString, AC::Const,
+         encode_string(info.hardware_version));
+  od.var(0x100A, "Manufacturer software version", DT::VisibleString, AC::Const,
+         encode_string(info.software_version));
+  Object& id = od.record(0x1018, "Identity object");
+  id.add(1, "Vendor-ID", DT::Unsigned32, AC::ReadOnly, encode(info.vendor_id));
+  id.add(2, "Product code", DT::Unsigned32, AC::ReadOnly, encode(info.product_code));
+  id.add(3, "Revision number", DT::Unsigned32, AC::ReadOnly, encode(info.revision));
+  id.add(4, "Serial number", DT::Unsigned32, AC::ReadOnly, encode(info.serial_number));
+  // 0x1021: the device serves its own EDS (the node fills it in on read); 0x1022 = ASCII.
+  od.var(0x1021, "Store EDS", DT::Domain, AC::ReadOnly, {});
+  od.var(0x1022, "Store format", DT::Unsigned8, AC::ReadOnly, {0});
+}
+
+void add_error_history(Dictionary& od) {
+  Object& hist = od.record(0x1003, "Pre-defined error field", ObjectCode::Array);
+  Entry& count = hist.entries.at(0);
+  count.name = "Number of errors";
+  count.access = AC::ReadWrite;
+  count.persistent = false;
+  for (unsigned i = 1; i <= kErrorHistoryLength; ++i)
+    hist.add(static_cast<uint8_t>(i), hex_index("Standard error field %u", i), DT::Unsigned32,
+             AC::ReadOnly, encode<uint32_t>(0));
+  // Writing 0 clears the history; any other value is refused (CiA 301 7.5.2.3).
+  count.validate = [](std::span<const uint8_t> d) {
+    return d[0] == 0 ? SdoAbort::None : SdoAbort::InvalidValue;
+  };
+  count.on_written = [&od] {
+    for (unsigned i = 1; i <= kErrorHistoryLength; ++i)
+      od.put<uint32_t>(0x1003, static_cast<uint8_t>(i), 0);
+  };
+}
+
+void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
+  Entry& sync = od.var(0x1005, "COB-ID SYNC message", DT::Unsigned32, AC::ReadWrite,
+                       encode<uint32_t>(cob::kSync));
+  sync.validate = [&od](std::span<const uint8_t> d) {
+    uint32_t current = od.get<uint32_t>(0x1005, 0), next = u32(d);
+    if (next & kCobExtended) return SdoAbort::InvalidValue;
+    if ((next & 0x7FF) != (current & 0x7FF) && (current & kCobGenerate) && (next & kCobGenerate))
+      return SdoAbort::InvalidValue;
+    return SdoAbort::None;
+  };
+  od.var(0x1006, "Communication cycle period", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
+  Entry& overflow = od.var(0x1019, "Synchronous counter overflow value", DT::Unsigned8,
+                           AC::ReadWrite, {0});
+  // 0 = no counter, 2..240 = counter range; 1 and 241..255 are reserved. The value may
+  // only change while the SYNC cycle period is 0 (CiA 301 7.5.2.22).
+  overflow.validate = [&od](std::span<const uint8_t> d) {
+    if (d[0] == 1 || d[0] > 240) return SdoAbort::InvalidValue;
+    if (od.get<uint32_t>(0x1006, 0) != 0) return SdoAbort::DeviceState;
+    return SdoAbort::None;
+  };
+
+  Entry& emcy = od.var(0x1014, "COB-ID EMCY", DT::Unsigned32, AC::ReadWrite,
+                       encode<uint32_t>(cob::kEmcyBase + info.node_id));
+  emcy.eds_default = "$NODEID+0x80";
+  emcy.validate = [&od](std::span<const uint8_t> d) {
+    return check_cob_id(od.get<uint32_t>(0x1014, 0), u32(d), kCobInvalid);
+  };
+  od.var(0x1015, "Inhibit time EMCY", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+}
+
+void add_heartbeat(Dictionary& od) {
+  Object& consumer = od.record(0x1016, "Consumer heartbeat time", ObjectCode::Array);
+  for (unsigned i = 1; i <= kHeartbeatConsumers; ++i) {
+    Entry& e = consumer.add(static_cast<uint8_t>(i), hex_index("Consumer heartbeat time %u", i),
+                            DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
+    // Two active entries may not watch the same node (CiA 301 7.5.2.18: abort 0x06040043).
+    e.validate = [&od, i](std::span<const uint8_t> d) {
+      uint32_t next = u32(d);
+      uint32_t node = (next >> 16) & 0xFF, time = next & 0xFFFF;
+      if (next >> 24) return SdoAbort::InvalidValue;
+      if (node == 0 || node > 127 || time == 0) return SdoAbort::None;
+      for (unsigned j = 1; j <= kHeartbeatConsumers; ++j) {
+        if (j == i) continue;
+        uint32_t other = od.get<uint32_t>(0x1016, static_cast<uint8_t>(j));
+        if (((other >> 16) & 0xFF) == node && (other & 0xFFFF) != 0)
+          return SdoAbort::ParameterIncompatible;
+      }
+      return SdoAbort::None;
+    };
+  }
+  od.var(0x1017, "Producer heartbeat time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(1000));
+}
+
+void add_store_restore(Dictionary& od) {
+  Object& store = od.record(0x1010, "Store parameters", ObjectCode::Array);
+  Object& restore = od.record(0x1011, "Restore default parameters", ObjectCode::Array);
+  for (const auto& g : kParameterGroups) {
+    // Reading gives the capability: bit 0 = the device saves on command.
+    Entry& s = store.add(g.sub, std::string("Save ") + g.name, DT::Unsigned32, AC::ReadWrite,
+                         encode<uint32_t>(1));
+    Entry& r = restore.add(g.sub, std::string("Restore ") + g.name, DT::Unsigned32,
+                           AC::ReadWrite, encode<uint32_t>(1));
+    s.persistent = r.persistent = false;
+    s.on_read = r.on_read = [](Bytes& v) { v = encode<uint32_t>(1); };
+    // A wrong signature is refused with 0x08000020 (CiA 301 7.5.2.13).
+    s.validate = [](std::span<const uint8_t> d) {
+      return u32(d) == kSaveSignature ? SdoAbort::None : SdoAbort::DataTransfer;
+    };
+    r.validate = [](std::span<const uint8_t> d) {
+      return u32(d) == kLoadSignature ? SdoAbort::None : SdoAbort::DataTransfer;
+    };
+  }
+}
+
+void add_sdo_server(Dictionary& od, const DeviceInfo& info) {
+  Object& sdo = od.record(0x1200, "SDO server parameter");
+  Entry& rx = sdo.add(1, "COB-ID client to server", DT::Unsigned32, AC::ReadOnly,
+                      encode<uint32_t>(cob::kSdoRx + info.node_id));
+  Entry& tx = sdo.add(2, "COB-ID server to client", DT::Unsigned32, AC::ReadOnly,
+                      encode<uint32_t>(cob::kSdoTx + info.node_id));
+  rx.eds_default = "$NODEID+0x600";
+  tx.eds_default = "$NODEID+0x580";
+}
+
+// Communication + mapping parameters of one PDO, with the CiA 301 reconfiguration rules.
+void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
+  bool rx = dir == PdoDirection::Receive;
+  uint16_t comm_index = static_cast<uint16_t>((rx ? 0x1400 : 0x1800) + n);
+  uint16_t map_index = static_cast<uint16_t>((rx ? 0x1600 : 0x1A00) + n);
+  const char* kind = rx ? "RPDO" : "TPDO";
+
+  // PDOs 1-4 have the pre-defined connection set IDs; the others start without an ID.
+  // TPDOs carry bit 30 (no RTR): this device does not answer remote frames.
+  uint32_t base = (rx ? cob::kRpdo1 : cob::kTpdo1) + 0x100 * n;
+  uint32_t no_rtr = rx ? 0 : kCobGenerate;
+  uint32_t cob_id = (n < 4 ? base + node_id : kCobInvalid) | no_rtr;
+
+  Object& comm = od.record(comm_index, hex_index(rx ? "RPDO %u communication parameter"
+                                                    : "TPDO %u communication parameter", n + 1));
+  Entry& id = comm.add(1, std::string("COB-ID used by ") + kind, DT::Unsigned32, AC::ReadWrite,
+                       encode<uint32_t>(cob_id));
+  if (n < 4) id.eds_default = hex_index("$NODEID+0x%X", no_rtr | base);
+  Entry& type = comm.add(2, "Transmission type", DT::Unsigned8, AC::ReadWrite, {254});
+  if (!rx) {
+    comm.add(3, "Inhibit time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+  }
+  comm.add(5, "Event timer", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+  if (!rx) comm.add(6, "SYNC start value", DT::Unsigned8, AC::ReadWrite, {0});
+
+  auto pdo_valid = [&od, comm_index] { return !(od.get<uint32_t>(comm_index, 1) & kCobInvalid); };
+  id.validate = [&od, comm_index](std::span<const uint8_t> d) {
+    return check_cob_id(od.get<uint32_t>(comm_index, 1), u32(d), kCobInvalid);
+  };
+  // Types 0..240 (synchronous), 254/255 (event-driven). 252/253 need RTR, which this device
+  // does not answer, and 241..251 are reserved.
+  type.validate = [](std::span<const uint8_t> d) {
+    return d[0] <= 240 || d[0] >= 254 ? SdoAbort::None : SdoAbort::InvalidValue;
+  };
+  if (!rx) {
+    // Inhibit time and SYNC start value may only change while the PDO does not exist.
+    auto only_when_invalid = [pdo_valid](std::span<const uint8_t>) {
+      return pdo_valid() ? SdoAbort::InvalidValue : SdoAbort::None;
+    };
+    comm.entries.at(3).validate = only_when_invalid;
+    comm.entries.at(6).validate = only_when_invalid;
+  }
+
+  Object& map = od.record(map_index, hex_index(rx ? "RPDO %u mapping parameter"
+                                                  : "TPDO %u mapping parameter", n + 1));
+  Entry& count = map.entries.at(0);
+  count.name = "Number of mapped objects";
+  count.access = AC::ReadWrite;
+  count.persistent = true;
+  count.high = Bytes{static_cast<uint8_t>(kMaxMappedEntries)};
+  for (unsigned i = 1; i <= kMaxMappedEntries; ++i) {
+    Entry& e = map.add(static_cast<uint8_t>(i), hex_index("Mapped object %u", i), DT::Unsigned32,
+                       AC::ReadWrite, encode<uint32_t>(0));
+    // CiA 301 7.5.2.36: entries change only while the PDO is invalid and the count is 0.
+    e.validate = [&od, map_index, pdo_valid, dir](std::span<const uint8_t> d) {
+      if (pdo_valid() || od.get<uint8_t>(map_index, 0) != 0) return SdoAbort::DeviceState;
+      uint32_t word = u32(d);
+      return word == 0 ? SdoAbort::None : check_mapping_entry(od, word, dir);
+    };
+  }
+  count.validate = [&od, map_index, pdo_valid, dir](std::span<const uint8_t> d) {
+    if (pdo_valid()) return SdoAbort::DeviceState;
+    std::vector<uint32_t> words;
+    for (unsigned i = 1; i <= d[0]; ++i)
+      words.push_back(od.get<uint32_t>(map_index, static_cast<uint8_t>(i)));
+    return check_mapping(od, words, dir);
+  };
+}
+
+void add_user_objects(Dictionary& od) {
+  // General-purpose storage for the master: registers it can map into PDOs and a data
+  // block, both kept by "store parameters" like any other setting.
+  Object& regs = od.record(0x2F00, "User registers", ObjectCode::Array);
+  for (unsigned i = 1; i <= 8; ++i)
+    regs.add(static_cast<uint8_t>(i), hex_index("User register %u", i), DT::Unsigned32,
+             AC::ReadWrite, encode<uint32_t>(0), true);
+  Entry& data = od.var(0x2F01, "User data", DT::Domain, AC::ReadWrite, {});
+  data.max_length = kUserDataMaxLength;
+  data.persistent = true;
+}
+
+}  // namespace
+
+bool is_restricted_can_id(uint32_t id) {
+  return id == 0x000 || (id >= 0x001 && id <= 0x07F) || (id >= 0x101 && id <= 0x180) ||
+         (id >= 0x581 && id <= 0x5FF) || (id >= 0x601 && id <= 0x67F) ||
+         (id >= 0x6E0 && id <= 0x6FF) || (id >= 0x701 && id <= 0x77F) ||
+         (id >= 0x780 && id <= 0x7FF);
+}
+
+void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
+  add_identity(od, info);
+  add_error_history(od);
+  add_sync_and_emcy(od, info);
+  add_heartbeat(od);
+  add_store_restore(od);
+  add_sdo_server(od, info);
+  for (unsigned n = 0; n < pdo_count(info); ++n) {
+    add_pdo(od, PdoDirection::Receive, n, info.node_id);
+    add_pdo(od, PdoDirection::Transmit, n, info.node_id);
+  }
+  add_user_objects(od);
+}
+
+}  // namespace stepnode::od

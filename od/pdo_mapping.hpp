@@ -1,0 +1,51 @@
+// PDO mapping (CiA 301 7.4.7 / 7.5.2.36): validating a mapping against the dictionary and
+// packing/unpacking PDO data bit-exactly, little-endian.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "od/dictionary.hpp"
+
+namespace stepnode::od {
+
+enum class PdoDirection { Receive, Transmit };
+
+struct MappedEntry {
+  uint16_t index = 0;
+  uint8_t sub = 0;
+  uint8_t bits = 0;
+  bool dummy() const { return index >= 0x0001 && index <= 0x0007; }
+  static MappedEntry from_word(uint32_t word) {
+    return {static_cast<uint16_t>(word >> 16), static_cast<uint8_t>(word >> 8),
+            static_cast<uint8_t>(word)};
+  }
+};
+
+using PdoMapping = std::vector<MappedEntry>;
+
+constexpr unsigned kMaxPdoBits = 64;
+constexpr unsigned kMaxMappedEntries = 8;
+
+// Checks one mapping word: object exists and is mappable in that direction, the length
+// matches the entry. RPDOs may map dummy entries (index 0x0001..0x0007 = a data type).
+SdoAbort check_mapping_entry(const Dictionary& dictionary, uint32_t word, PdoDirection direction);
+// Checks a whole mapping (each entry, and the total length <= 64 bits: 0x06040042).
+SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> words,
+                       PdoDirection direction);
+
+size_t mapping_bits(const PdoMapping& mapping);
+inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(mapping) + 7) / 8; }
+
+// Packs the mapped values into a PDO payload (bit by bit, LSB first).
+std::vector<uint8_t> pack_pdo(Dictionary& dictionary, const PdoMapping& mapping);
+// Writes the values of a received PDO into the dictionary (WriteOrigin::Pdo). The caller
+// has checked the length. Returns the first abort from a write (e.g. out of range), or None.
+SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
+                    std::span<const uint8_t> data);
+
+// Bit-level helpers, exposed for tests.
+void write_bits(std::span<uint8_t> dst, size_t bit_offset, uint64_t value, size_t bits);
+uint64_t read_bits(std::span<const uint8_t> src, size_t bit_offset, size_t bits);
+
+}  // namespace stepnode::od
