@@ -122,14 +122,12 @@ SdoAbort Dictionary::write(uint16_t index, uint8_t sub, std::span<const uint8_t>
                            WriteOrigin origin) {
   if (SdoAbort a = locate(index, sub); a != SdoAbort::None) return a;
   Entry& e = *find(index, sub);
-  // Restoring stored parameters may touch entries that are writable only in the stored
-  // sense (none today), but never read-only ones.
   if (!writable(e.access)) return SdoAbort::ReadOnly;
   if (SdoAbort a = check_value(e, data); a != SdoAbort::None) return a;
   if (e.validate) {
     if (SdoAbort a = e.validate(data); a != SdoAbort::None) return a;
   }
-  (void)origin;
+  (void)origin;  // same rules for SDO and PDO writes (see WriteOrigin)
   e.value.assign(data.begin(), data.end());
   if (e.on_written) e.on_written();
   return SdoAbort::None;

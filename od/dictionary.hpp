@@ -17,9 +17,9 @@ namespace stepnode::od {
 
 enum class ObjectCode : uint8_t { Var = 0x07, Array = 0x08, Record = 0x09 };
 
-// Who is writing: the SDO server obeys access rights; an RPDO writes mapped entries (checked
-// when mapped); the device itself updates read-only values (no checks, no hooks).
-enum class WriteOrigin : uint8_t { Sdo, Pdo, Restore };
+// Who is writing: a master over SDO, or a received PDO (its entries were checked when
+// mapped). Both obey the same rules today; hooks may tell them apart.
+enum class WriteOrigin : uint8_t { Sdo, Pdo };
 
 struct Entry {
   uint16_t index = 0;

@@ -1,0 +1,191 @@
+#include "node/canopen_node.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "od/eds.hpp"
+
+namespace stepnode::node {
+namespace {
+
+std::filesystem::path parameter_file_for(const NodeOptions& o) {
+  return o.state_dir / ("node-" + std::to_string(o.device.node_id) + ".params");
+}
+
+}  // namespace
+
+CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
+    : options_(std::move(options)),
+      send_(std::move(send_frame)),
+      store_((od::build_device_dictionary(dictionary_, options_.device), dictionary_),
+             parameter_file_for(options_)),
+      emcy_(dictionary_, [this](const od::CanFrame& f) { send(f); }),
+      heartbeat_(dictionary_, options_.device.node_id, [this](const od::CanFrame& f) { send(f); }),
+      consumer_(dictionary_,
+                HeartbeatConsumer::Events{
+                    .timeout =
+                        [this](uint8_t node, uint64_t now) {
+                          spdlog::warn("heartbeat of node {} lost", node);
+                          emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication,
+                                      {node}, now);
+                          if (on_heartbeat_lost) on_heartbeat_lost(node, now);
+                        },
+                    .recovered =
+                        [this](uint8_t node, uint64_t now) {
+                          spdlog::info("heartbeat of node {} is back", node);
+                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                        },
+                    .remote_reset = nullptr}),
+      sync_(
+          dictionary_, [this](const od::CanFrame& f) { send(f); },
+          [this](uint8_t counter, uint64_t now) { pdo_.on_sync(counter, now); },
+          [this](uint8_t dlc, uint64_t now) {
+            emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
+          }),
+      pdo_(dictionary_, od::pdo_count(options_.device), [this](const od::CanFrame& f) { send(f); },
+           emcy_),
+      sdo_(dictionary_, od::cob::kSdoTx + options_.device.node_id) {
+  sdo_.set_timeout_us(options_.sdo_timeout_us);
+  install_service_hooks();
+}
+
+CanopenNode::~CanopenNode() = default;
+
+void CanopenNode::install_service_hooks() {
+  od::Dictionary& od = dictionary_;
+  // Store/restore: the signature check of the dictionary comes first, then the file.
+  for (const auto& group : od::kParameterGroups) {
+    od::Entry& save = od.at(0x1010, group.sub);
+    save.validate = [this, check = save.validate, group](std::span<const uint8_t> d) {
+      if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
+      spdlog::info("saving {} to {}", group.name, store_.file().string());
+      return store_.save(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::DataTransfer;
+    };
+    od::Entry& restore = od.at(0x1011, group.sub);
+    restore.validate = [this, check = restore.validate, group](std::span<const uint8_t> d) {
+      if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
+      spdlog::info("restoring defaults of {} (after the next reset)", group.name);
+      return store_.forget(group.first, group.last) ? od::SdoAbort::None
+                                                     : od::SdoAbort::DataTransfer;
+    };
+  }
+  for (auto& [index, obj] : od.objects()) {
+    (void)obj;
+    if (index >= 0x1400 && index <= 0x1BFF)
+      for (auto& [sub, e] : od.object(index)->entries) e.on_written = [this] { pdo_.mark_dirty(); };
+  }
+  for (auto& [sub, e] : od.object(0x1016)->entries) e.on_written = [this] { consumer_.reset(); };
+  for (uint16_t index : {0x1005, 0x1006, 0x1019})
+    od.at(index, 0).on_written = [this] { sync_.reset(0); };
+  // 0x1021: the device's own EDS, generated from this dictionary when read.
+  od.at(0x1021, 0).on_read = [this](od::Bytes& v) {
+    v = od::encode_string(od::write_eds(dictionary_, options_.device));
+  };
+}
+
+void CanopenNode::start(uint64_t now_us) { initialise(true, now_us); }
+
+void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
+  // Reset application: every parameter back to its stored value (or default); reset
+  // communication: only 0x1000-0x1FFF (CiA 301 7.3.2.2.1).
+  state_ = NmtState::Initialising;
+  pdo_.stop();
+  sdo_.reset();
+  if (reset_application) {
+    store_.load_into_dictionary(0x1000, 0x9FFF);
+    emcy_.reset();
+    if (on_reset_application) on_reset_application(now_us);
+  } else {
+    store_.load_into_dictionary(0x1000, 0x1FFF);
+    emcy_.reset();
+  }
+  pdo_.mark_dirty();
+  consumer_.reset();
+  sync_.reset(now_us);
+  // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
+  send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
+  enter(NmtState::PreOperational, now_us);
+}
+
+void CanopenNode::enter(NmtState next, uint64_t now_us) {
+  NmtState previous = state_;
+  state_ = next;
+  emcy_.set_enabled(emcy_allowed(next));
+  if (next == NmtState::Operational && previous != NmtState::Operational) pdo_.start(now_us);
+  if (next != NmtState::Operational) pdo_.stop();
+  if (!sdo_allowed(next)) sdo_.reset();
+  if (previous != next) {
+    spdlog::info("NMT: {} -> {}", state_name(previous), state_name(next));
+    // Confirm the new state at once; the period restarts from here.
+    heartbeat_.send_now(next, now_us);
+    if (on_state_change) on_state_change(next, now_us);
+  }
+  emcy_.on_tick(now_us);
+}
+
+void CanopenNode::handle_nmt(NmtCommand command, uint64_t now_us) {
+  spdlog::debug("NMT command: {}", command_name(command));
+  switch (command) {
+    case NmtCommand::ResetNode: initialise(true, now_us); break;
+    case NmtCommand::ResetCommunication: initialise(false, now_us); break;
+    default: enter(next_state(state_, command), now_us); break;
+  }
+}
+
+void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+  if (auto command = decode_nmt(frame, node_id())) {
+    handle_nmt(*command, now_us);
+    return;
+  }
+  consumer_.on_frame(frame, now_us);  // error control runs in every state
+  if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
+
+  if (sync_.on_frame(frame, now_us)) {
+    // handled
+  } else if (frame.id == (dictionary_.get<uint32_t>(0x1200, 1) & 0x7FF) && !frame.rtr) {
+    sdo_out_.clear();
+    sdo_.on_request(frame, now_us, sdo_out_);
+    for (const auto& f : sdo_out_) send(f);
+  } else if (state_ == NmtState::Operational) {
+    pdo_.on_frame(frame, now_us);
+  }
+  // A received frame may change mapped values: event-driven TPDOs go out now, not on the
+  // next tick.
+  on_tick(now_us);
+}
+
+void CanopenNode::on_tick(uint64_t now_us) {
+  consumer_.on_tick(now_us);
+  if (state_ == NmtState::Initialising) return;
+  heartbeat_.on_tick(state_, now_us);
+  if (state_ == NmtState::Stopped) return;
+  sdo_out_.clear();
+  sdo_.on_tick(now_us, sdo_out_);
+  for (const auto& f : sdo_out_) send(f);
+  sync_.on_tick(now_us);
+  pdo_.on_tick(now_us);
+  emcy_.on_tick(now_us);
+}
+
+void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
+  switch (event) {
+    case BusEvent::ErrorPassive:
+      emcy_.raise(emcy_code::kCanErrorPassive, error_bits::kCommunication, {}, now_us);
+      break;
+    case BusEvent::ErrorActive:
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
+      break;
+    case BusEvent::Restarted:
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
+      emcy_.report(emcy_code::kRecoveredFromBusOff, error_bits::kCommunication, {}, now_us);
+      break;
+    case BusEvent::RxOverflow:
+    case BusEvent::TxOverflow:
+      emcy_.report(emcy_code::kCanOverrun, error_bits::kCommunication, {}, now_us);
+      break;
+    case BusEvent::ErrorWarning:
+    case BusEvent::BusOff:
+      break;  // logged by the transport; nothing can be sent while bus-off
+  }
+}
+
+}  // namespace stepnode::node

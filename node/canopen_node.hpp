@@ -1,0 +1,77 @@
+// One CANopen slave (CiA 301): the dictionary and every communication service, driven by
+// frames and time passed in. No sockets and no clocks here, so tests run in virtual time;
+// node_process.cpp connects it to SocketCAN and CLOCK_MONOTONIC.
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+
+#include "node/emcy.hpp"
+#include "node/heartbeat.hpp"
+#include "node/nmt.hpp"
+#include "node/parameter_store.hpp"
+#include "node/pdo_engine.hpp"
+#include "node/sync.hpp"
+#include "od/can_frame.hpp"
+#include "od/device_dictionary.hpp"
+#include "od/dictionary.hpp"
+#include "od/sdo_server.hpp"
+
+namespace stepnode::node {
+
+struct NodeOptions {
+  od::DeviceInfo device;
+  std::filesystem::path state_dir = ".";
+  uint64_t sdo_timeout_us = 1'000'000;
+};
+
+// What the CAN controller reports (SocketCAN error frames), as the node sees it.
+enum class BusEvent { ErrorWarning, ErrorPassive, ErrorActive, BusOff, Restarted, RxOverflow, TxOverflow };
+
+class CanopenNode {
+ public:
+  using Send = std::function<void(const od::CanFrame&)>;
+  CanopenNode(NodeOptions options, Send send);
+  ~CanopenNode();
+
+  // Power-on: load stored parameters, send boot-up, enter pre-operational.
+  void start(uint64_t now_us);
+  void on_frame(const od::CanFrame& frame, uint64_t now_us);
+  void on_tick(uint64_t now_us);
+  void on_bus_event(BusEvent event, uint64_t now_us);
+
+  NmtState state() const { return state_; }
+  uint8_t node_id() const { return options_.device.node_id; }
+  od::Dictionary& dictionary() { return dictionary_; }
+  EmcyProducer& emcy() { return emcy_; }
+  const std::filesystem::path& parameter_file() const { return store_.file(); }
+
+  // Application hooks (the axes use them): a monitored heartbeat was lost / came back;
+  // NMT state changed; reset node reloaded the application parameters.
+  std::function<void(uint8_t node, uint64_t now_us)> on_heartbeat_lost;
+  std::function<void(NmtState state, uint64_t now_us)> on_state_change;
+  std::function<void(uint64_t now_us)> on_reset_application;
+
+ private:
+  void install_service_hooks();
+  void initialise(bool reset_application, uint64_t now_us);
+  void enter(NmtState state, uint64_t now_us);
+  void handle_nmt(NmtCommand command, uint64_t now_us);
+  void send(const od::CanFrame& frame) { send_(frame); }
+
+  NodeOptions options_;
+  Send send_;
+  od::Dictionary dictionary_;
+  ParameterStore store_;
+  EmcyProducer emcy_;
+  HeartbeatProducer heartbeat_;
+  HeartbeatConsumer consumer_;
+  SyncService sync_;
+  PdoEngine pdo_;
+  od::SdoServer sdo_;
+  NmtState state_ = NmtState::Initialising;
+  std::vector<od::CanFrame> sdo_out_;
+};
+
+}  // namespace stepnode::node

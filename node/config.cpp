@@ -1,0 +1,154 @@
+#include "node/config.hpp"
+
+#include <CLI/CLI.hpp>
+#include <toml++/toml.h>
+
+#include <cstdlib>
+#include <sstream>
+
+namespace stepnode::node {
+namespace {
+
+std::filesystem::path default_state_dir() {
+  if (const char* s = std::getenv("STATE_DIRECTORY")) return s;  // systemd StateDirectory=
+  if (const char* s = std::getenv("XDG_STATE_HOME")) return std::filesystem::path(s) / "stepnode";
+  if (const char* h = std::getenv("HOME")) return std::filesystem::path(h) / ".local/state/stepnode";
+  return "/var/lib/stepnode";
+}
+
+// Returns true when the file set the node id.
+bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given, bool id_given,
+                      bool state_given) {
+  bool id_set = false;
+  toml::table t;
+  try {
+    t = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream msg;
+    msg << "config " << path << ": " << e.description();
+    if (e.source().begin) msg << " (line " << e.source().begin.line << ")";
+    throw UsageError(msg.str());
+  }
+  auto bad = [&](const std::string& key, const std::string& rule) {
+    throw UsageError("config " + path + ": " + key + ": " + rule);
+  };
+  if (auto v = t["iface"]) {
+    if (!v.is_string()) bad("iface", "must be a string");
+    if (!iface_given) cfg.iface = *v.value<std::string>();
+  }
+  if (auto v = t["node_id"]) {
+    auto id = v.value<int64_t>();
+    if (!id || *id < 1 || *id > 127) bad("node_id", "must be an integer 1..127");
+    if (!id_given) cfg.options.device.node_id = static_cast<uint8_t>(*id);
+    id_set = true;
+  }
+  if (auto v = t["state_dir"]) {
+    if (!v.is_string()) bad("state_dir", "must be a string");
+    if (!state_given) cfg.options.state_dir = *v.value<std::string>();
+  }
+  if (auto v = t["tick_us"]) {
+    auto us = v.value<int64_t>();
+    if (!us || *us < 100 || *us > 100000) bad("tick_us", "must be an integer 100..100000");
+    cfg.tick_us = static_cast<uint64_t>(*us);
+  }
+  if (auto v = t["axes"]) {
+    auto n = v.value<int64_t>();
+    if (!n || *n < 1 || *n > static_cast<int64_t>(od::kMaxAxes)) bad("axes", "must be an integer 1..8");
+    cfg.options.device.axes = static_cast<unsigned>(*n);
+  }
+  if (auto v = t["serial_number"]) {
+    auto n = v.value<int64_t>();
+    if (!n || *n < 0 || *n > 0xFFFFFFFFll) bad("serial_number", "must be an integer 0..4294967295");
+    cfg.options.device.serial_number = static_cast<uint32_t>(*n);
+  }
+  if (auto v = t["log_level"]) {
+    if (!v.is_string()) bad("log_level", "must be a string");
+    cfg.log_level = *v.value<std::string>();
+  }
+  if (auto defaults = t["defaults"].as_table()) {
+    for (const auto& [key, value] : *defaults) {
+      std::string text;
+      if (auto i = value.value<int64_t>()) text = std::to_string(*i);
+      else if (auto s = value.value<std::string>()) text = *s;
+      else if (auto d = value.value<double>()) text = std::to_string(*d);
+      else bad("defaults." + std::string(key.str()), "must be an integer, number or string");
+      cfg.object_defaults.emplace_back(std::string(key.str()), text);
+    }
+  }
+  return id_set;
+}
+
+}  // namespace
+
+NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
+  NodeConfig cfg;
+  exit_now = false;
+  CLI::App app{"stepnode: a CANopen (CiA 301) stepper-motion node on a SocketCAN interface"};
+  std::string config_file;
+  std::string state_dir;
+  int node_id = 0;
+  app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
+  app.add_option("--node-id", node_id, "CANopen node id, 1..127");
+  app.add_option("--config", config_file, "TOML config file (see README)");
+  app.add_option("--state-dir", state_dir, "where stored parameters (0x1010) are kept");
+  app.add_option("--tick-us", cfg.tick_us, "engine tick period in microseconds (100..100000)");
+  app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
+  app.add_flag("--print-eds", cfg.print_eds, "print the device's EDS (CiA 306) and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    exit_now = true;
+    exit_code = app.exit(e);
+    return cfg;
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(e.what());
+  }
+  bool id_known = app.count("--node-id") > 0;
+  if (!config_file.empty()) {
+    if (!std::filesystem::is_regular_file(config_file))
+      throw UsageError("config " + config_file + ": cannot read file");
+    id_known |= load_config_file(config_file, cfg, !cfg.iface.empty(), id_known, !state_dir.empty());
+  }
+  if (app.count("--node-id")) {
+    if (node_id < 1 || node_id > 127)
+      throw UsageError("--node-id " + std::to_string(node_id) + ": must be 1..127");
+    cfg.options.device.node_id = static_cast<uint8_t>(node_id);
+  }
+  if (!state_dir.empty()) cfg.options.state_dir = state_dir;
+  if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
+  if (cfg.tick_us < 100 || cfg.tick_us > 100000)
+    throw UsageError("--tick-us " + std::to_string(cfg.tick_us) + ": must be 100..100000");
+  static const char* levels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
+  if (std::find(std::begin(levels), std::end(levels), cfg.log_level) == std::end(levels))
+    throw UsageError("--log-level " + cfg.log_level + ": must be one of trace, debug, info, warn, error, critical, off");
+  if (cfg.print_eds) return cfg;
+  if (cfg.iface.empty()) throw UsageError("--iface is required (e.g. --iface vcan0)");
+  if (!id_known) throw UsageError("--node-id is required (1..127)");
+  return cfg;
+}
+
+void apply_object_defaults(od::Dictionary& od,
+                           const std::vector<std::pair<std::string, std::string>>& defaults) {
+  for (const auto& [key, text] : defaults) {
+    unsigned index = 0, sub = 0;
+    char extra = 0;
+    int n = std::sscanf(key.c_str(), "%x:%x%c", &index, &sub, &extra);
+    if (n < 1 || n > 2 || index > 0xFFFF || sub > 0xFF)
+      throw UsageError("defaults: '" + key + "' is not INDEX or INDEX:SUB in hex (e.g. \"1017\" or \"1016:1\")");
+    od::Entry* e = od.find(static_cast<uint16_t>(index), static_cast<uint8_t>(sub));
+    if (!e || !od::writable(e->access))
+      throw UsageError("defaults: object " + key + " does not exist or is not writable");
+    od::Bytes value;
+    try {
+      value = od::parse_value(e->type, text);
+    } catch (const std::invalid_argument& ex) {
+      throw UsageError("defaults: " + key + ": " + ex.what());
+    }
+    if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
+      throw UsageError("defaults: " + key + " = " + text + ": " + std::string(od::abort_text(a)));
+    e->default_value = value;
+    e->value = value;
+  }
+}
+
+}  // namespace stepnode::node

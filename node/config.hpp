@@ -1,0 +1,37 @@
+// The node process's settings: command line, optional TOML config file, and defaults for
+// dictionary objects. The command line wins over the file.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "node/canopen_node.hpp"
+
+namespace stepnode::node {
+
+struct NodeConfig {
+  std::string iface;
+  NodeOptions options;
+  uint64_t tick_us = 1000;
+  std::string log_level = "info";
+  // Object defaults from the config's [defaults] table: "1017" or "1016:1" -> value text.
+  std::vector<std::pair<std::string, std::string>> object_defaults;
+  bool print_eds = false;
+};
+
+// Thrown for bad input; the process prints "stepnode: <message>" and exits with status 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Parses argv (and the config file it names). For --help, sets exit_now and exit_code
+// (the text is printed). Throws UsageError with one clear line on bad input.
+NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code);
+
+// Applies object_defaults to the dictionary's default values. Throws UsageError naming the
+// object when one does not exist, is not writable or does not fit its type.
+void apply_object_defaults(od::Dictionary& dictionary,
+                           const std::vector<std::pair<std::string, std::string>>& defaults);
+
+}  // namespace stepnode::node

@@ -1,0 +1,87 @@
+#include "node/event_loop.hpp"
+
+#include <sys/epoll.h>
+#include <sys/signalfd.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+#include <stdexcept>
+#include <string>
+
+namespace stepnode::node {
+
+EventLoop::EventLoop() : epoll_fd_(::epoll_create1(EPOLL_CLOEXEC)) {
+  if (epoll_fd_ < 0) throw std::runtime_error(std::string("epoll_create1: ") + std::strerror(errno));
+}
+
+EventLoop::~EventLoop() {
+  for (int fd : owned_fds_) ::close(fd);
+  ::close(epoll_fd_);
+}
+
+uint64_t EventLoop::now_us() {
+  timespec ts;
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000u + static_cast<uint64_t>(ts.tv_nsec) / 1000;
+}
+
+void EventLoop::watch(int fd, Callback on_readable) {
+  epoll_event ev{};
+  ev.events = EPOLLIN;
+  ev.data.fd = fd;
+  if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &ev) < 0)
+    throw std::runtime_error(std::string("epoll_ctl: ") + std::strerror(errno));
+  callbacks_[fd] = std::move(on_readable);
+}
+
+void EventLoop::every(uint64_t period_us, Callback on_tick) {
+  int fd = ::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(std::string("timerfd_create: ") + std::strerror(errno));
+  itimerspec spec{};
+  spec.it_interval.tv_sec = static_cast<time_t>(period_us / 1'000'000);
+  spec.it_interval.tv_nsec = static_cast<long>((period_us % 1'000'000) * 1000);
+  spec.it_value = spec.it_interval;
+  ::timerfd_settime(fd, 0, &spec, nullptr);
+  owned_fds_.push_back(fd);
+  watch(fd, [fd, cb = std::move(on_tick)] {
+    uint64_t expirations = 0;
+    if (::read(fd, &expirations, sizeof expirations) > 0) cb();
+  });
+}
+
+void EventLoop::stop_on_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  ::sigprocmask(SIG_BLOCK, &set, nullptr);
+  int fd = ::signalfd(-1, &set, SFD_NONBLOCK | SFD_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(std::string("signalfd: ") + std::strerror(errno));
+  owned_fds_.push_back(fd);
+  watch(fd, [this, fd] {
+    signalfd_siginfo info;
+    if (::read(fd, &info, sizeof info) > 0) stop();
+  });
+}
+
+void EventLoop::run() {
+  running_ = true;
+  epoll_event events[16];
+  while (running_) {
+    int n = ::epoll_wait(epoll_fd_, events, 16, -1);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("epoll_wait: ") + std::strerror(errno));
+    }
+    for (int i = 0; i < n && running_; ++i) {
+      auto it = callbacks_.find(events[i].data.fd);
+      if (it != callbacks_.end()) it->second();
+    }
+  }
+}
+
+}  // namespace stepnode::node

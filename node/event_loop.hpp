@@ -1,0 +1,36 @@
+// A small epoll loop: file descriptors with callbacks, periodic timerfds, and signals via
+// signalfd so SIGINT/SIGTERM end the loop cleanly.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <vector>
+
+namespace stepnode::node {
+
+class EventLoop {
+ public:
+  using Callback = std::function<void()>;
+  EventLoop();
+  ~EventLoop();
+  EventLoop(const EventLoop&) = delete;
+  EventLoop& operator=(const EventLoop&) = delete;
+
+  void watch(int fd, Callback on_readable);
+  // Calls `on_tick` every `period_us` (a timerfd; missed expirations are coalesced).
+  void every(uint64_t period_us, Callback on_tick);
+  // Ends run() on SIGINT or SIGTERM (they are blocked for the whole process).
+  void stop_on_signals();
+  void run();
+  void stop() { running_ = false; }
+
+  static uint64_t now_us();  // CLOCK_MONOTONIC
+
+ private:
+  int epoll_fd_ = -1;
+  std::map<int, Callback> callbacks_;
+  std::vector<int> owned_fds_;
+  bool running_ = false;
+};
+
+}  // namespace stepnode::node

@@ -1,0 +1,64 @@
+// Heartbeat producer (0x1017) and consumer (0x1016), CiA 301 7.2.8.3.2.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+
+#include "node/nmt.hpp"
+#include "od/can_frame.hpp"
+#include "od/device_dictionary.hpp"
+#include "od/dictionary.hpp"
+
+namespace stepnode::node {
+
+class HeartbeatProducer {
+ public:
+  using Send = std::function<void(const od::CanFrame&)>;
+  HeartbeatProducer(od::Dictionary& dictionary, uint8_t node_id, Send send);
+
+  // Sends the heartbeat now (state changes are confirmed at once) and restarts the period.
+  void send_now(NmtState state, uint64_t now_us);
+  void on_tick(NmtState state, uint64_t now_us);
+
+ private:
+  od::Dictionary& dictionary_;
+  uint8_t node_id_;
+  Send send_;
+  uint64_t last_sent_us_ = 0;
+};
+
+// Watches the nodes listed in 0x1016. Monitoring of a node starts with its first
+// heartbeat; a missing heartbeat after the consumer time is a timeout (EMCY 0x8130).
+class HeartbeatConsumer {
+ public:
+  struct Events {
+    std::function<void(uint8_t node, uint64_t now_us)> timeout;
+    std::function<void(uint8_t node, uint64_t now_us)> recovered;
+    std::function<void(uint8_t node, uint64_t now_us)> remote_reset;  // boot-up seen
+  };
+  HeartbeatConsumer(od::Dictionary& dictionary, Events events);
+
+  // Feeds a frame from the bus (anything not a heartbeat is ignored).
+  void on_frame(const od::CanFrame& frame, uint64_t now_us);
+  void on_tick(uint64_t now_us);
+  // Forget all monitoring state (reset communication, or 0x1016 changed).
+  void reset();
+  bool timed_out(uint8_t node) const;
+  bool any_timed_out() const;
+
+ private:
+  struct Slot {
+    uint8_t node = 0;
+    uint16_t time_ms = 0;
+    bool started = false;
+    bool timed_out = false;
+    uint64_t last_us = 0;
+  };
+  void load();
+
+  od::Dictionary& dictionary_;
+  Events events_;
+  std::array<Slot, od::kHeartbeatConsumers> slots_{};
+};
+
+}  // namespace stepnode::node

@@ -1,0 +1,93 @@
+// stepnode: the node process. Connects the CANopen node to a SocketCAN interface and to
+// CLOCK_MONOTONIC through an epoll loop with a timerfd tick.
+#include <linux/can/error.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <iostream>
+
+#include "node/canopen_node.hpp"
+#include "node/config.hpp"
+#include "node/event_loop.hpp"
+#include "node/socketcan.hpp"
+#include "od/eds.hpp"
+
+using namespace stepnode;
+
+namespace {
+
+// SocketCAN error frames in CANopen terms (linux/can/error.h).
+std::vector<node::BusEvent> bus_events(const node::ReceivedFrame& r) {
+  std::vector<node::BusEvent> out;
+  if (r.error_class & CAN_ERR_BUSOFF) out.push_back(node::BusEvent::BusOff);
+  if (r.error_class & CAN_ERR_RESTARTED) out.push_back(node::BusEvent::Restarted);
+  if (r.error_class & CAN_ERR_CRTL) {
+    uint8_t s = r.controller_status;
+    if (s & (CAN_ERR_CRTL_RX_OVERFLOW)) out.push_back(node::BusEvent::RxOverflow);
+    if (s & (CAN_ERR_CRTL_TX_OVERFLOW)) out.push_back(node::BusEvent::TxOverflow);
+    if (s & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE)) out.push_back(node::BusEvent::ErrorPassive);
+    else if (s & (CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_TX_WARNING)) out.push_back(node::BusEvent::ErrorWarning);
+    if (s & CAN_ERR_CRTL_ACTIVE) out.push_back(node::BusEvent::ErrorActive);
+  }
+  return out;
+}
+
+int run(const node::NodeConfig& cfg) {
+  node::SocketCan can(cfg.iface);
+  node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
+  node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults);
+
+  node::EventLoop loop;
+  loop.stop_on_signals();
+  loop.watch(can.fd(), [&] {
+    while (auto r = can.receive()) {
+      uint64_t now = node::EventLoop::now_us();
+      if (r->error_frame) {
+        spdlog::warn("{}: CAN error frame, class 0x{:08x} controller 0x{:02x}", cfg.iface,
+                     r->error_class, r->controller_status);
+        for (auto e : bus_events(*r)) canopen.on_bus_event(e, now);
+        continue;
+      }
+      canopen.on_frame(r->frame, now);
+    }
+  });
+  loop.every(cfg.tick_us, [&] {
+    canopen.on_tick(node::EventLoop::now_us());
+    can.flush();
+  });
+  spdlog::info("node {} on {}, {} axes, parameters in {}", cfg.options.device.node_id, cfg.iface,
+               cfg.options.device.axes, canopen.parameter_file().string());
+  canopen.start(node::EventLoop::now_us());
+  loop.run();
+  spdlog::info("stopping");
+  can.flush();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  node::NodeConfig cfg;
+  try {
+    bool exit_now = false;
+    int exit_code = 0;
+    cfg = node::parse_command_line(argc, argv, exit_now, exit_code);
+    if (exit_now) return exit_code;
+    spdlog::set_level(spdlog::level::from_str(cfg.log_level));
+    if (cfg.print_eds) {
+      od::Dictionary dictionary;
+      od::build_device_dictionary(dictionary, cfg.options.device);
+      node::apply_object_defaults(dictionary, cfg.object_defaults);
+      std::cout << od::write_eds(dictionary, cfg.options.device);
+      return 0;
+    }
+    return run(cfg);
+  } catch (const node::UsageError& e) {
+    std::fprintf(stderr, "stepnode: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    // The interface missing or not a CAN device is bad input too: one line, status 2.
+    std::fprintf(stderr, "stepnode: %s\n", e.what());
+    return 2;
+  }
+}

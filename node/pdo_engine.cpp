@@ -1,0 +1,187 @@
+#include "node/pdo_engine.hpp"
+
+namespace stepnode::node {
+namespace {
+
+constexpr uint32_t kInvalid = 0x80000000u;
+
+od::PdoMapping read_mapping(od::Dictionary& od, uint16_t index) {
+  od::PdoMapping mapping;
+  uint8_t n = od.get<uint8_t>(index, 0);
+  for (uint8_t i = 1; i <= n && i <= od::kMaxMappedEntries; ++i)
+    mapping.push_back(od::MappedEntry::from_word(od.get<uint32_t>(index, i)));
+  return mapping;
+}
+
+}  // namespace
+
+PdoEngine::PdoEngine(od::Dictionary& dictionary, unsigned pdo_count, Send send, EmcyProducer& emcy)
+    : dictionary_(dictionary), count_(pdo_count), send_(std::move(send)), emcy_(emcy) {}
+
+void PdoEngine::reload() {
+  dirty_ = false;
+  rpdos_.resize(count_);
+  tpdos_.resize(count_);
+  for (unsigned n = 0; n < count_; ++n) {
+    Rpdo& r = rpdos_[n];
+    uint16_t rc = static_cast<uint16_t>(0x1400 + n);
+    uint32_t rid = dictionary_.get<uint32_t>(rc, 1);
+    r.mapping = read_mapping(dictionary_, static_cast<uint16_t>(0x1600 + n));
+    r.bytes = od::mapping_bytes(r.mapping);
+    // A PDO with nothing mapped carries no data: it stays silent (CiA 301 7.5.2.36).
+    r.valid = !(rid & kInvalid) && !r.mapping.empty();
+    r.cob_id = rid & 0x7FF;
+    r.type = dictionary_.get<uint8_t>(rc, 2);
+    r.event_ms = dictionary_.get<uint16_t>(rc, 5);
+    if (!r.valid) r.sync_pending = r.monitoring = r.timed_out = false;
+
+    Tpdo& t = tpdos_[n];
+    uint16_t tc = static_cast<uint16_t>(0x1800 + n);
+    uint32_t tid = dictionary_.get<uint32_t>(tc, 1);
+    bool was_valid = t.valid;
+    t.mapping = read_mapping(dictionary_, static_cast<uint16_t>(0x1A00 + n));
+    t.valid = !(tid & kInvalid) && !t.mapping.empty();
+    t.cob_id = tid & 0x7FF;
+    t.type = dictionary_.get<uint8_t>(tc, 2);
+    t.inhibit_us = uint64_t{dictionary_.get<uint16_t>(tc, 3)} * 100;
+    t.event_us = uint64_t{dictionary_.get<uint16_t>(tc, 5)} * 1000;
+    t.sync_start = dictionary_.get<uint8_t>(tc, 6);
+    if (t.valid && !was_valid) {
+      // A PDO that (re)appears starts fresh and, if event-driven, sends its values once.
+      t.last_data.clear();
+      t.sent_any = false;
+      t.send_request = running_;
+      t.event_pending = running_;
+      t.sync_count = 0;
+      t.waiting_sync_start = t.sync_start != 0;
+    }
+  }
+}
+
+void PdoEngine::start(uint64_t now_us) {
+  if (dirty_) reload();
+  running_ = true;
+  for (auto& t : tpdos_) {
+    t.send_request = t.event_pending = true;
+    t.sync_count = 0;
+    t.waiting_sync_start = t.sync_start != 0;
+  }
+  for (auto& r : rpdos_) r.monitoring = r.timed_out = r.sync_pending = false;
+  on_tick(now_us);
+}
+
+void PdoEngine::stop() {
+  running_ = false;
+  for (auto& r : rpdos_) r.sync_pending = r.monitoring = false;
+}
+
+void PdoEngine::apply(Rpdo& pdo, std::span<const uint8_t> data) {
+  if (od::unpack_pdo(dictionary_, pdo.mapping, data) != od::SdoAbort::None)
+    ++stats_.rpdo_write_errors;
+}
+
+bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+  if (dirty_) reload();
+  if (frame.rtr) return false;
+  bool consumed = false;
+  for (auto& r : rpdos_) {
+    if (!r.valid || r.cob_id != frame.id) continue;
+    consumed = true;
+    ++stats_.rpdo_received;
+    // Too short: not processed, EMCY 0x8210. Too long: processed, EMCY 0x8220 (CiA 301
+    // 7.2.2.2 leaves the extra bytes unused).
+    if (frame.dlc < r.bytes) {
+      ++stats_.rpdo_length_errors;
+      emcy_.report(emcy_code::kPdoLength, error_bits::kCommunication,
+                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
+                   now_us);
+      continue;
+    }
+    if (frame.dlc > r.bytes) {
+      ++stats_.rpdo_length_errors;
+      emcy_.report(emcy_code::kPdoLengthExceeded, error_bits::kCommunication,
+                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
+                   now_us);
+    }
+    r.last_rx_us = now_us;
+    r.monitoring = true;
+    if (r.timed_out) {
+      r.timed_out = false;
+      emcy_.clear(emcy_code::kRpdoTimeout, now_us);
+    }
+    std::span<const uint8_t> data(frame.data.data(), r.bytes);
+    if (r.type <= 240) {  // synchronous: applied at the next SYNC
+      r.sync_data.assign(data.begin(), data.end());
+      r.sync_pending = true;
+    } else {
+      apply(r, data);
+    }
+  }
+  return consumed;
+}
+
+void PdoEngine::transmit(Tpdo& t, std::vector<uint8_t> data, uint64_t now_us) {
+  od::CanFrame f(t.cob_id, std::span<const uint8_t>(data));
+  send_(f);
+  ++stats_.tpdo_sent;
+  t.last_data = std::move(data);
+  t.last_sent_us = now_us;
+  t.sent_any = true;
+  t.send_request = false;
+  t.event_pending = false;
+}
+
+void PdoEngine::on_sync(uint8_t counter, uint64_t now_us) {
+  if (dirty_) reload();
+  if (!running_) return;
+  for (auto& r : rpdos_) {
+    if (r.valid && r.sync_pending) {
+      r.sync_pending = false;
+      apply(r, r.sync_data);
+    }
+  }
+  for (auto& t : tpdos_) {
+    if (!t.valid || t.type > 240) continue;
+    if (t.waiting_sync_start) {
+      // With a SYNC counter, the first transmission waits for the start value (7.5.2.35).
+      if (counter == 0 || counter != t.sync_start) continue;
+      t.waiting_sync_start = false;
+      t.sync_count = t.type;  // transmit on this SYNC
+    } else {
+      ++t.sync_count;
+    }
+    std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
+    if (t.type == 0) {
+      // Acyclic synchronous: sent on the SYNC after a change.
+      if (t.event_pending || data != t.last_data) transmit(t, std::move(data), now_us);
+      t.sync_count = 0;
+    } else if (t.sync_count >= t.type) {
+      t.sync_count = 0;
+      transmit(t, std::move(data), now_us);
+    }
+  }
+}
+
+void PdoEngine::on_tick(uint64_t now_us) {
+  if (dirty_) reload();
+  if (!running_) return;
+  for (auto& r : rpdos_) {
+    // Deadline monitoring of received PDOs (event timer, CiA 301 7.5.2.35).
+    if (r.valid && r.monitoring && !r.timed_out && r.event_ms &&
+        now_us - r.last_rx_us > uint64_t{r.event_ms} * 1000) {
+      r.timed_out = true;
+      emcy_.raise(emcy_code::kRpdoTimeout, error_bits::kCommunication, {}, now_us);
+    }
+  }
+  for (auto& t : tpdos_) {
+    if (!t.valid || t.type <= 240) continue;
+    std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
+    bool changed = !t.sent_any || data != t.last_data;
+    bool timer = t.event_us && now_us - t.last_sent_us >= t.event_us;
+    if (!(changed || timer || t.send_request)) continue;
+    if (t.sent_any && now_us - t.last_sent_us < t.inhibit_us) continue;  // retried next tick
+    transmit(t, std::move(data), now_us);
+  }
+}
+
+}  // namespace stepnode::node

@@ -1,0 +1,85 @@
+// The PDO engine (CiA 301 7.2.2): receive PDOs applied to the dictionary, transmit PDOs
+// sent on SYNC (types 0..240) or on change (254/255) with inhibit time and event timer.
+// Configuration is read from the dictionary (0x1400.. / 0x1600.. / 0x1800.. / 0x1A00..)
+// whenever a parameter changed.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "node/emcy.hpp"
+#include "od/can_frame.hpp"
+#include "od/dictionary.hpp"
+#include "od/pdo_mapping.hpp"
+
+namespace stepnode::node {
+
+class PdoEngine {
+ public:
+  using Send = std::function<void(const od::CanFrame&)>;
+  PdoEngine(od::Dictionary& dictionary, unsigned pdo_count, Send send, EmcyProducer& emcy);
+
+  // A communication or mapping parameter changed: re-read before the next use.
+  void mark_dirty() { dirty_ = true; }
+  // Handles a frame if it is one of our RPDOs (call only in operational). Returns true if
+  // the frame was an RPDO of this node.
+  bool on_frame(const od::CanFrame& frame, uint64_t now_us);
+  void on_sync(uint8_t counter, uint64_t now_us);
+  void on_tick(uint64_t now_us);
+  // Entering operational: event-driven TPDOs go out once with the current values.
+  void start(uint64_t now_us);
+  // Leaving operational: forget pending data and timers.
+  void stop();
+
+  struct Stats {
+    uint64_t rpdo_received = 0, rpdo_length_errors = 0, rpdo_write_errors = 0;
+    uint64_t tpdo_sent = 0;
+  };
+  const Stats& stats() const { return stats_; }
+
+ private:
+  struct Rpdo {
+    bool valid = false;
+    uint32_t cob_id = 0;
+    uint8_t type = 0;
+    uint16_t event_ms = 0;
+    od::PdoMapping mapping;
+    size_t bytes = 0;
+    // runtime
+    bool sync_pending = false;
+    std::vector<uint8_t> sync_data;
+    bool monitoring = false, timed_out = false;
+    uint64_t last_rx_us = 0;
+  };
+  struct Tpdo {
+    bool valid = false;
+    uint32_t cob_id = 0;
+    uint8_t type = 0;
+    uint64_t inhibit_us = 0;
+    uint64_t event_us = 0;
+    uint8_t sync_start = 0;
+    od::PdoMapping mapping;
+    // runtime
+    std::vector<uint8_t> last_data;
+    bool sent_any = false, send_request = false, event_pending = false;
+    bool waiting_sync_start = false;
+    uint64_t last_sent_us = 0;
+    unsigned sync_count = 0;
+  };
+
+  void reload();
+  void transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us);
+  void apply(Rpdo& pdo, std::span<const uint8_t> data);
+
+  od::Dictionary& dictionary_;
+  unsigned count_;
+  Send send_;
+  EmcyProducer& emcy_;
+  std::vector<Rpdo> rpdos_;
+  std::vector<Tpdo> tpdos_;
+  bool dirty_ = true;
+  bool running_ = false;
+  Stats stats_;
+};
+
+}  // namespace stepnode::node

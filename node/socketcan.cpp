@@ -1,0 +1,135 @@
+#include "node/socketcan.hpp"
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <spdlog/spdlog.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+namespace stepnode::node {
+namespace {
+
+[[noreturn]] void fail(const std::string& iface, const char* what) {
+  throw std::runtime_error(iface + ": " + what + ": " + std::strerror(errno));
+}
+
+}  // namespace
+
+SocketCan::SocketCan(const std::string& iface, bool receive_own) : iface_(iface) {
+  if (iface.empty() || iface.size() >= IFNAMSIZ)
+    throw std::runtime_error("interface name '" + iface + "' is empty or too long");
+  fd_ = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+  if (fd_ < 0) fail(iface, "cannot open a CAN socket (is SocketCAN in this kernel?)");
+  unsigned index = ::if_nametoindex(iface.c_str());
+  if (index == 0) {
+    ::close(fd_);
+    throw std::runtime_error(iface + ": no such CAN interface");
+  }
+  // Error frames: everything the controller reports (bus-off, passive, overflow...).
+  can_err_mask_t err_mask = CAN_ERR_MASK;
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask);
+  int on = 1;
+  ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+  int own = receive_own ? 1 : 0;
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own);
+  sockaddr_can addr{};
+  addr.can_family = AF_CAN;
+  addr.can_ifindex = static_cast<int>(index);
+  if (::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) < 0) {
+    int saved = errno;
+    ::close(fd_);
+    errno = saved;
+    fail(iface, "bind");
+  }
+}
+
+SocketCan::~SocketCan() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void SocketCan::set_filters(const std::vector<std::pair<uint32_t, uint32_t>>& filters) {
+  std::vector<can_filter> f;
+  for (auto [id, mask] : filters) f.push_back({id, mask | CAN_EFF_FLAG | CAN_RTR_FLAG});
+  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.empty() ? nullptr : f.data(),
+               static_cast<socklen_t>(f.size() * sizeof(can_filter)));
+}
+
+std::optional<ReceivedFrame> SocketCan::receive() {
+  can_frame raw{};
+  iovec iov{&raw, sizeof raw};
+  char control[CMSG_SPACE(sizeof(timespec)) + 64];
+  msghdr msg{};
+  msg.msg_iov = &iov;
+  msg.msg_iovlen = 1;
+  msg.msg_control = control;
+  msg.msg_controllen = sizeof control;
+  ssize_t n = ::recvmsg(fd_, &msg, 0);
+  if (n < 0) {
+    if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)
+      spdlog::warn("{}: receive failed: {}", iface_, std::strerror(errno));
+    return std::nullopt;
+  }
+  if (n != static_cast<ssize_t>(sizeof raw)) return std::nullopt;  // CAN FD frames: not ours
+  ReceivedFrame r;
+  for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c; c = CMSG_NXTHDR(&msg, c)) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMPNS) {
+      timespec ts;
+      std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+      r.kernel_time_ns = static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
+    }
+  }
+  if (raw.can_id & CAN_ERR_FLAG) {
+    r.error_frame = true;
+    r.error_class = raw.can_id & CAN_ERR_MASK;
+    r.controller_status = raw.data[1];
+    r.protocol_status = raw.data[2];
+    return r;
+  }
+  if (raw.can_id & CAN_EFF_FLAG) return std::nullopt;  // CANopen uses 11-bit IDs only
+  r.frame.id = raw.can_id & CAN_SFF_MASK;
+  r.frame.rtr = (raw.can_id & CAN_RTR_FLAG) != 0;
+  r.frame.dlc = std::min<uint8_t>(raw.len, 8);
+  std::memcpy(r.frame.data.data(), raw.data, r.frame.dlc);
+  return r;
+}
+
+void SocketCan::send(const od::CanFrame& frame) {
+  if (queue_.size() >= kMaxQueue) {
+    queue_.pop_front();  // a dead bus must not grow memory without bound
+    ++dropped_;
+  }
+  queue_.push_back(frame);
+  flush();
+}
+
+bool SocketCan::flush() {
+  while (!queue_.empty()) {
+    const od::CanFrame& f = queue_.front();
+    can_frame raw{};
+    raw.can_id = f.id | (f.rtr ? CAN_RTR_FLAG : 0);
+    raw.len = f.dlc;
+    std::memcpy(raw.data, f.data.data(), f.dlc);
+    ssize_t n = ::write(fd_, &raw, sizeof raw);
+    if (n == static_cast<ssize_t>(sizeof raw)) {
+      queue_.pop_front();
+      continue;
+    }
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == ENOBUFS || errno == EINTR))
+      return false;  // the controller queue is full: retry when writable
+    // ENETDOWN (interface down, bus-off): keep the frame and retry on the next tick.
+    if (n < 0 && errno == ENETDOWN) return false;
+    spdlog::warn("{}: send failed: {}", iface_, std::strerror(errno));
+    queue_.pop_front();
+    ++dropped_;
+  }
+  return true;
+}
+
+}  // namespace stepnode::node

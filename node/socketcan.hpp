@@ -1,0 +1,54 @@
+// SocketCAN raw transport: a non-blocking CAN_RAW socket with kernel receive timestamps,
+// error frames, and a send queue that absorbs a full controller queue (ENOBUFS/EAGAIN).
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "od/can_frame.hpp"
+
+namespace stepnode::node {
+
+struct ReceivedFrame {
+  od::CanFrame frame;
+  uint64_t kernel_time_ns = 0;  // CLOCK_REALTIME receive timestamp from the kernel
+  bool error_frame = false;
+  uint32_t error_class = 0;      // CAN_ERR_* bits of an error frame
+  uint8_t controller_status = 0;  // data[1] of a CAN_ERR_CRTL error frame
+  uint8_t protocol_status = 0;
+};
+
+class SocketCan {
+ public:
+  // Opens and binds a raw socket on `iface`. Throws std::runtime_error naming the
+  // interface and the failing call (e.g. "vcan0: no such interface").
+  explicit SocketCan(const std::string& iface, bool receive_own = false);
+  ~SocketCan();
+  SocketCan(const SocketCan&) = delete;
+  SocketCan& operator=(const SocketCan&) = delete;
+
+  int fd() const { return fd_; }
+  const std::string& iface() const { return iface_; }
+  // Optional acceptance filters (id, mask); none means everything.
+  void set_filters(const std::vector<std::pair<uint32_t, uint32_t>>& filters);
+
+  // Reads one frame if one is waiting.
+  std::optional<ReceivedFrame> receive();
+  // Queues and sends as far as the kernel accepts; the rest waits for flush().
+  void send(const od::CanFrame& frame);
+  // Sends queued frames; returns true when the queue is empty.
+  bool flush();
+  bool has_pending() const { return !queue_.empty(); }
+  uint64_t dropped() const { return dropped_; }
+
+ private:
+  int fd_ = -1;
+  std::string iface_;
+  std::deque<od::CanFrame> queue_;
+  uint64_t dropped_ = 0;
+  static constexpr size_t kMaxQueue = 4096;
+};
+
+}  // namespace stepnode::node
