@@ -8,8 +8,8 @@
 
 #include "node/canopen_node.hpp"
 #include "node/config.hpp"
-#include "node/event_loop.hpp"
-#include "node/socketcan.hpp"
+#include "canio/event_loop.hpp"
+#include "canio/socketcan.hpp"
 #include "od/eds.hpp"
 
 using namespace stepnode;
@@ -17,7 +17,7 @@ using namespace stepnode;
 namespace {
 
 // SocketCAN error frames in CANopen terms (linux/can/error.h).
-std::vector<node::BusEvent> bus_events(const node::ReceivedFrame& r) {
+std::vector<node::BusEvent> bus_events(const canio::ReceivedFrame& r) {
   std::vector<node::BusEvent> out;
   if (r.error_class & CAN_ERR_BUSOFF) out.push_back(node::BusEvent::BusOff);
   if (r.error_class & CAN_ERR_RESTARTED) out.push_back(node::BusEvent::Restarted);
@@ -33,15 +33,15 @@ std::vector<node::BusEvent> bus_events(const node::ReceivedFrame& r) {
 }
 
 int run(const node::NodeConfig& cfg) {
-  node::SocketCan can(cfg.iface);
+  canio::SocketCan can(cfg.iface);
   node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
   node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults);
 
-  node::EventLoop loop;
+  canio::EventLoop loop;
   loop.stop_on_signals();
   loop.watch(can.fd(), [&] {
     while (auto r = can.receive()) {
-      uint64_t now = node::EventLoop::now_us();
+      uint64_t now = canio::EventLoop::now_us();
       if (r->error_frame) {
         spdlog::warn("{}: CAN error frame, class 0x{:08x} controller 0x{:02x}", cfg.iface,
                      r->error_class, r->controller_status);
@@ -52,12 +52,12 @@ int run(const node::NodeConfig& cfg) {
     }
   });
   loop.every(cfg.tick_us, [&] {
-    canopen.on_tick(node::EventLoop::now_us());
+    canopen.on_tick(canio::EventLoop::now_us());
     can.flush();
   });
   spdlog::info("node {} on {}, {} axes, parameters in {}", cfg.options.device.node_id, cfg.iface,
                cfg.options.device.axes, canopen.parameter_file().string());
-  canopen.start(node::EventLoop::now_us());
+  canopen.start(canio::EventLoop::now_us());
   loop.run();
   spdlog::info("stopping");
   can.flush();

@@ -6,7 +6,7 @@
 #include <map>
 #include <vector>
 
-namespace stepnode::node {
+namespace stepnode::canio {
 
 class EventLoop {
  public:
@@ -33,4 +33,4 @@ class EventLoop {
   bool running_ = false;
 };
 
-}  // namespace stepnode::node
+}  // namespace stepnode::canio

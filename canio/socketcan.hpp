@@ -9,7 +9,7 @@
 
 #include "od/can_frame.hpp"
 
-namespace stepnode::node {
+namespace stepnode::canio {
 
 struct ReceivedFrame {
   od::CanFrame frame;
@@ -51,4 +51,4 @@ class SocketCan {
   static constexpr size_t kMaxQueue = 4096;
 };
 
-}  // namespace stepnode::node
+}  // namespace stepnode::canio

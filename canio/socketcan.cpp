@@ -1,4 +1,4 @@
-#include "node/socketcan.hpp"
+#include "canio/socketcan.hpp"
 
 #include <linux/can.h>
 #include <linux/can/error.h>
@@ -13,7 +13,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace stepnode::node {
+namespace stepnode::canio {
 namespace {
 
 [[noreturn]] void fail(const std::string& iface, const char* what) {
@@ -132,4 +132,4 @@ bool SocketCan::flush() {
   return true;
 }
 
-}  // namespace stepnode::node
+}  // namespace stepnode::canio

@@ -1,4 +1,4 @@
-#include "node/event_loop.hpp"
+#include "canio/event_loop.hpp"
 
 #include <sys/epoll.h>
 #include <sys/signalfd.h>
@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace stepnode::node {
+namespace stepnode::canio {
 
 EventLoop::EventLoop() : epoll_fd_(::epoll_create1(EPOLL_CLOEXEC)) {
   if (epoll_fd_ < 0) throw std::runtime_error(std::string("epoll_create1: ") + std::strerror(errno));
@@ -84,4 +84,4 @@ void EventLoop::run() {
   }
 }
 
-}  // namespace stepnode::node
+}  // namespace stepnode::canio
