@@ -1,0 +1,256 @@
+// stepctl: a CANopen master on the command line for stepnode (and any CiA 301 device):
+// NMT, SDO read/write/dump typed by the EDS, and a decoded view of the bus.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <sstream>
+
+#include "od/sdo_abort.hpp"
+#include "od/value_codec.hpp"
+#include "tools/stepctl/frame_decoder.hpp"
+#include "tools/stepctl/master_bus.hpp"
+#include "tools/stepctl/object_catalog.hpp"
+
+using namespace stepnode;
+using namespace stepnode::tools;
+
+namespace {
+
+struct Failure : std::runtime_error {  // exit 1: the bus or the node said no
+  using std::runtime_error::runtime_error;
+};
+
+std::string addr(uint16_t index, uint8_t sub) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%04X:%02X", index, sub);
+  return buf;
+}
+
+od::SdoClient::Mode mode_of(bool block) { return block ? od::SdoClient::Mode::Block : od::SdoClient::Mode::Auto; }
+
+void check(const od::SdoResult& r, uint8_t node, uint16_t index, uint8_t sub) {
+  if (r.ok()) return;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "0x%08X", static_cast<uint32_t>(r.abort));
+  throw Failure("node " + std::to_string(node) + " " + addr(index, sub) + ": " +
+                (r.aborted_by_server ? "abort " : "failed ") + buf + " " + std::string(od::abort_text(r.abort)));
+}
+
+// ---- nmt ------------------------------------------------------------------------------
+int cmd_nmt(MasterBus& bus, const std::string& what, int node, int timeout_ms) {
+  static const std::map<std::string, std::pair<uint8_t, uint8_t>> commands = {
+      {"start", {0x01, 0x05}},      {"stop", {0x02, 0x04}},       {"preop", {0x80, 0x7F}},
+      {"reset-node", {0x81, 0x00}}, {"reset-comm", {0x82, 0x00}},
+  };
+  auto [cs, expect] = commands.at(what);
+  bus.send(od::CanFrame(od::cob::kNmt, {cs, static_cast<uint8_t>(node)}));
+  if (node == 0) {
+    std::cout << "NMT " << what << " sent to all nodes\n";
+    return 0;
+  }
+  // Confirmation: the node's heartbeat (or boot-up after a reset) with the new state.
+  uint64_t deadline = monotonic_us() + static_cast<uint64_t>(timeout_ms) * 1000;
+  while (monotonic_us() < deadline) {
+    auto r = bus.receive(static_cast<int>((deadline - monotonic_us()) / 1000) + 1);
+    if (r && r->frame.id == od::cob::kHeartbeat + static_cast<uint32_t>(node) && r->frame.dlc == 1 &&
+        r->frame.data[0] == expect) {
+      std::cout << "node " << node << ": " << (expect == 0 ? "boot-up after " + what : what + " confirmed")
+                << "\n";
+      return 0;
+    }
+  }
+  throw Failure("node " + std::to_string(node) + ": no confirming heartbeat within " +
+                std::to_string(timeout_ms) + " ms (is 0x1017 set?)");
+}
+
+// ---- read / write / dump -------------------------------------------------------------------
+std::string show(const ObjectCatalog& cat, uint16_t index, uint8_t sub, const od::Bytes& data) {
+  auto info = cat.find(index, sub);
+  if (!info) return addr(index, sub) + " = " + od::format_value(od::DataType::Domain, data);
+  bool hex = info->type == od::DataType::Unsigned32 && (index < 0x2000);
+  return addr(index, sub) + " " + info->name + " = " + od::format_value(info->type, data, hex) + " (" +
+         std::string(od::type_name(info->type)) + ")";
+}
+
+int cmd_read(MasterBus& bus, const ObjectCatalog& cat, int node, const std::string& object, bool block,
+             const std::string& output) {
+  auto [index, sub] = parse_object_address(object);
+  od::SdoResult r = bus.upload(static_cast<uint8_t>(node), index, sub, mode_of(block));
+  check(r, static_cast<uint8_t>(node), index, sub);
+  if (!output.empty()) {
+    std::ofstream out(output, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(r.data.data()), static_cast<std::streamsize>(r.data.size()));
+    if (!out) throw Failure("cannot write " + output);
+    std::cout << addr(index, sub) << ": " << r.data.size() << " bytes written to " << output << "\n";
+    return 0;
+  }
+  std::cout << show(cat, index, sub, r.data) << "\n";
+  return 0;
+}
+
+int cmd_write(MasterBus& bus, const ObjectCatalog& cat, int node, const std::string& object,
+              const std::string& value, const std::string& type_name, bool block) {
+  auto [index, sub] = parse_object_address(object);
+  od::DataType type;
+  if (!type_name.empty()) {
+    auto t = od::type_from_name(type_name);
+    if (!t) throw std::invalid_argument("--type " + type_name + ": not a CiA 301 type name (e.g. UNSIGNED16)");
+    type = *t;
+  } else if (auto info = cat.find(index, sub)) {
+    type = info->type;
+  } else {
+    throw std::invalid_argument("object " + addr(index, sub) + " is not in " + cat.source() +
+                                "; give --type or --eds");
+  }
+  od::Bytes data;
+  if (!value.empty() && value[0] == '@') {  // @FILE: the file's bytes (DOMAIN, strings)
+    std::ifstream in(value.substr(1), std::ios::binary);
+    if (!in) throw std::invalid_argument("cannot read " + value.substr(1));
+    data.assign(std::istreambuf_iterator<char>(in), {});
+  } else {
+    data = od::parse_value(type, value);
+  }
+  od::SdoResult r = bus.download(static_cast<uint8_t>(node), index, sub, data, mode_of(block));
+  check(r, static_cast<uint8_t>(node), index, sub);
+  std::cout << show(cat, index, sub, data) << " written\n";
+  return 0;
+}
+
+int cmd_dump(MasterBus& bus, const ObjectCatalog& cat, int node) {
+  int failures = 0;
+  for (const auto& o : cat.all()) {
+    if (o.access == od::Access::WriteOnly) continue;
+    od::SdoResult r = bus.upload(static_cast<uint8_t>(node), o.index, o.sub, od::SdoClient::Mode::Auto);
+    if (r.abort == od::SdoAbort::Timeout) throw Failure("node " + std::to_string(node) + ": no SDO answer");
+    if (r.ok()) {
+      std::cout << show(cat, o.index, o.sub, r.data) << "\n";
+    } else if (r.abort != od::SdoAbort::NoObject && r.abort != od::SdoAbort::NoSubindex) {
+      ++failures;
+      std::cout << addr(o.index, o.sub) << " " << o.name << ": " << od::abort_text(r.abort) << "\n";
+    }
+  }
+  return failures ? 1 : 0;
+}
+
+// ---- watch -----------------------------------------------------------------------------
+void discover_pdos(MasterBus& sdo, FrameDecoder& decoder, uint8_t node) {
+  decoder.forget_node(node);
+  for (bool transmit : {true, false}) {
+    uint16_t comm = transmit ? 0x1800 : 0x1400, map = transmit ? 0x1A00 : 0x1600;
+    for (unsigned n = 0; n < 512; ++n) {
+      od::SdoResult id = sdo.upload(node, static_cast<uint16_t>(comm + n), 1);
+      if (!id.ok()) break;  // no more PDOs (or not a node we can read)
+      uint32_t cob = od::decode<uint32_t>(id.data);
+      if (cob & 0x80000000u) continue;
+      od::SdoResult count = sdo.upload(node, static_cast<uint16_t>(map + n), 0);
+      if (!count.ok() || count.data.empty()) continue;
+      PdoLayout layout{node, transmit, n + 1, {}};
+      for (uint8_t i = 1; i <= count.data[0] && i <= 8; ++i) {
+        od::SdoResult w = sdo.upload(node, static_cast<uint16_t>(map + n), i);
+        if (w.ok()) layout.mapping.push_back(od::MappedEntry::from_word(od::decode<uint32_t>(w.data)));
+      }
+      decoder.learn(cob & 0x7FF, layout);
+    }
+  }
+}
+
+int cmd_watch(const std::string& iface, const ObjectCatalog& cat, bool passive, int seconds) {
+  MasterBus bus(iface);
+  std::unique_ptr<MasterBus> sdo;
+  if (!passive) sdo = std::make_unique<MasterBus>(iface);
+  FrameDecoder decoder(cat);
+  std::set<uint8_t> known;
+  uint64_t start = monotonic_us();
+  uint64_t end = seconds > 0 ? start + static_cast<uint64_t>(seconds) * 1'000'000 : UINT64_MAX;
+  while (monotonic_us() < end) {
+    auto r = bus.receive(100);
+    if (!r) continue;
+    const od::CanFrame& f = r->frame;
+    std::printf("%10.3f  %03X [%u] %-23s  %s\n", static_cast<double>(monotonic_us() - start) / 1e6, f.id, f.dlc,
+                hex_bytes(f.data.data(), f.dlc).c_str(), decoder.describe(f).c_str());
+    std::fflush(stdout);
+    if (!sdo) continue;
+    // Learn (again) a node's PDO mapping when it appears, reboots, or a master remaps it.
+    if (f.id > 0x700 && f.id < 0x780 && f.dlc == 1) {
+      uint8_t node = static_cast<uint8_t>(f.id - 0x700);
+      if ((f.data[0] == 0x00 || !known.count(node)) && f.data[0] != 0x04) {
+        known.insert(node);
+        discover_pdos(*sdo, decoder, node);
+      }
+    } else if (f.id > 0x580 && f.id < 0x600 && f.dlc == 8 && f.data[0] == 0x60) {
+      uint16_t index = od::get_u16(f.data.data() + 1);
+      if (index >= 0x1400 && index <= 0x1BFF) known.erase(static_cast<uint8_t>(f.id - 0x580));
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"stepctl: CANopen master for stepnode nodes (NMT, SDO, bus watch)"};
+  app.require_subcommand(1);
+  std::string iface = "vcan0", eds, type_name, output;
+  int timeout_ms = 1000;
+  bool block = false, passive = false;
+  int seconds = 0;
+  app.add_option("--iface", iface, "SocketCAN interface")->capture_default_str();
+  app.add_option("--eds", eds, "EDS file describing the node's objects (default: stepnode's own)");
+  app.add_option("--timeout", timeout_ms, "SDO / confirmation timeout in ms")->capture_default_str();
+
+  std::string nmt_what;
+  int node = -1;
+  auto* nmt = app.add_subcommand("nmt", "NMT command: start|stop|preop|reset-node|reset-comm");
+  nmt->add_option("command", nmt_what)->required()->check(
+      CLI::IsMember({"start", "stop", "preop", "reset-node", "reset-comm"}));
+  nmt->add_option("--node", node, "node id 1..127, or 0 for all nodes")->required()->check(CLI::Range(0, 127));
+
+  std::string object, value;
+  auto* read = app.add_subcommand("read", "read an object over SDO: read NODE INDEX[:SUB]");
+  read->add_option("node", node)->required()->check(CLI::Range(1, 127));
+  read->add_option("object", object, "e.g. 0x1017 or 0x1018:1")->required();
+  read->add_flag("--block", block, "use SDO block transfer");
+  read->add_option("--output", output, "write the raw bytes to a file (DOMAIN, EDS in 0x1021)");
+
+  auto* write = app.add_subcommand("write", "write an object over SDO: write NODE INDEX[:SUB] VALUE");
+  write->add_option("node", node)->required()->check(CLI::Range(1, 127));
+  write->add_option("object", object)->required();
+  write->add_option("value", value, "number (decimal or 0x..), text, or @FILE")->required();
+  write->add_option("--type", type_name, "CiA 301 type when the object is not in the EDS");
+  write->add_flag("--block", block, "use SDO block transfer");
+
+  auto* dump = app.add_subcommand("dump", "read every object of a node: dump NODE");
+  dump->add_option("node", node)->required()->check(CLI::Range(1, 127));
+
+  auto* watch = app.add_subcommand("watch", "decode the bus traffic of every node");
+  watch->add_flag("--passive", passive, "never send (do not read PDO mappings over SDO)");
+  watch->add_option("--seconds", seconds, "stop after this many seconds (0 = until Ctrl-C)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "stepctl: %s\n", e.what());
+    return 2;
+  }
+  try {
+    ObjectCatalog catalog(eds);
+    if (*watch) return cmd_watch(iface, catalog, passive, seconds);
+    MasterBus bus(iface);
+    bus.set_sdo_timeout_ms(timeout_ms);
+    if (*nmt) return cmd_nmt(bus, nmt_what, node, timeout_ms);
+    if (*read) return cmd_read(bus, catalog, node, object, block, output);
+    if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
+    if (*dump) return cmd_dump(bus, catalog, node);
+  } catch (const Failure& e) {
+    std::fprintf(stderr, "stepctl: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stepctl: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
