@@ -2,6 +2,7 @@
 // Used by stepctl, the bridge and tests. Pure: frames in, frames out, time passed in.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "od/can_frame.hpp"
@@ -53,8 +54,8 @@ class SdoClient {
   uint32_t response_cob_id_;
   uint64_t timeout_us_ = 1'000'000;
   uint8_t block_size_ = 127;
-  struct State;
-  State* state_ = nullptr;
+  struct State;  // the transfer in progress and the last result; see sdo_client.cpp
+  std::unique_ptr<State> state_;
 };
 
 }  // namespace stepnode::od

@@ -2,6 +2,7 @@
 // both directions against a Dictionary. Pure: frames in, frames out, time passed in.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "od/can_frame.hpp"
@@ -29,14 +30,13 @@ class SdoServer {
   void set_block_size(uint8_t blksize) { block_size_ = blksize; }
 
  private:
-  struct Impl;
   Dictionary& dictionary_;
   uint32_t tx_cob_id_;
   uint64_t timeout_us_ = 1'000'000;
   uint8_t block_size_ = 127;
   // Transfer state lives in the .cpp; see sdo_server.cpp for the states.
   struct State;
-  State* state_ = nullptr;
+  std::unique_ptr<State> state_;
 
  public:
   ~SdoServer();
