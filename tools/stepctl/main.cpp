@@ -5,14 +5,13 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <set>
 #include <sstream>
 
 #include "od/sdo_abort.hpp"
 #include "od/value_codec.hpp"
-#include "tools/stepctl/frame_decoder.hpp"
 #include "tools/stepctl/master_bus.hpp"
 #include "tools/stepctl/object_catalog.hpp"
+#include "tools/stepctl/watch.hpp"
 
 using namespace stepnode;
 using namespace stepnode::tools;
@@ -135,59 +134,6 @@ int cmd_dump(MasterBus& bus, const ObjectCatalog& cat, int node) {
   return failures ? 1 : 0;
 }
 
-// ---- watch -----------------------------------------------------------------------------
-void discover_pdos(MasterBus& sdo, FrameDecoder& decoder, uint8_t node) {
-  decoder.forget_node(node);
-  for (bool transmit : {true, false}) {
-    uint16_t comm = transmit ? 0x1800 : 0x1400, map = transmit ? 0x1A00 : 0x1600;
-    for (unsigned n = 0; n < 512; ++n) {
-      od::SdoResult id = sdo.upload(node, static_cast<uint16_t>(comm + n), 1);
-      if (!id.ok()) break;  // no more PDOs (or not a node we can read)
-      uint32_t cob = od::decode<uint32_t>(id.data);
-      if (cob & 0x80000000u) continue;
-      od::SdoResult count = sdo.upload(node, static_cast<uint16_t>(map + n), 0);
-      if (!count.ok() || count.data.empty()) continue;
-      PdoLayout layout{node, transmit, n + 1, {}};
-      for (uint8_t i = 1; i <= count.data[0] && i <= 8; ++i) {
-        od::SdoResult w = sdo.upload(node, static_cast<uint16_t>(map + n), i);
-        if (w.ok()) layout.mapping.push_back(od::MappedEntry::from_word(od::decode<uint32_t>(w.data)));
-      }
-      decoder.learn(cob & 0x7FF, layout);
-    }
-  }
-}
-
-int cmd_watch(const std::string& iface, const ObjectCatalog& cat, bool passive, int seconds) {
-  MasterBus bus(iface);
-  std::unique_ptr<MasterBus> sdo;
-  if (!passive) sdo = std::make_unique<MasterBus>(iface);
-  FrameDecoder decoder(cat);
-  std::set<uint8_t> known;
-  uint64_t start = monotonic_us();
-  uint64_t end = seconds > 0 ? start + static_cast<uint64_t>(seconds) * 1'000'000 : UINT64_MAX;
-  while (monotonic_us() < end) {
-    auto r = bus.receive(100);
-    if (!r) continue;
-    const od::CanFrame& f = r->frame;
-    std::printf("%10.3f  %03X [%u] %-23s  %s\n", static_cast<double>(monotonic_us() - start) / 1e6, f.id, f.dlc,
-                hex_bytes(f.data.data(), f.dlc).c_str(), decoder.describe(f).c_str());
-    std::fflush(stdout);
-    if (!sdo) continue;
-    // Learn (again) a node's PDO mapping when it appears, reboots, or a master remaps it.
-    if (f.id > 0x700 && f.id < 0x780 && f.dlc == 1) {
-      uint8_t node = static_cast<uint8_t>(f.id - 0x700);
-      if ((f.data[0] == 0x00 || !known.count(node)) && f.data[0] != 0x04) {
-        known.insert(node);
-        discover_pdos(*sdo, decoder, node);
-      }
-    } else if (f.id > 0x580 && f.id < 0x600 && f.dlc == 8 && f.data[0] == 0x60) {
-      uint16_t index = od::get_u16(f.data.data() + 1);
-      if (index >= 0x1400 && index <= 0x1BFF) known.erase(static_cast<uint8_t>(f.id - 0x580));
-    }
-  }
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -238,7 +184,7 @@ int main(int argc, char** argv) {
   }
   try {
     ObjectCatalog catalog(eds);
-    if (*watch) return cmd_watch(iface, catalog, passive, seconds);
+    if (*watch) return run_watch(iface, catalog, passive, seconds);
     MasterBus bus(iface);
     bus.set_sdo_timeout_ms(timeout_ms);
     if (*nmt) return cmd_nmt(bus, nmt_what, node, timeout_ms);

@@ -34,6 +34,10 @@ template <class Start>
 od::SdoResult MasterBus::run(uint8_t node, Start start) {
   od::SdoClient client(od::cob::kSdoRx + node, od::cob::kSdoTx + node);
   client.set_timeout_us(static_cast<uint64_t>(sdo_timeout_ms_) * 1000);
+  // Frames that queued up before this transfer are not its answers (and a socket left
+  // unread for long may have filled its buffer): start from an empty queue.
+  while (can_.receive()) {
+  }
   std::vector<od::CanFrame> out;
   start(client, out);
   for (const auto& f : out) can_.send(f);
