@@ -1,0 +1,77 @@
+#include "node/motion/ramp.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace stepnode::motion {
+namespace {
+
+// sum(base+1 .. level) = (level-base)(level+base+1)/2
+__int128 level_sum(int64_t base, int64_t level) {
+  if (level <= base) return 0;
+  return static_cast<__int128>(level - base) * (level + base + 1) / 2;
+}
+
+__int128 ramp_phase(Rational z, int64_t base, int64_t level) {
+  // Z may be fractional (num/den); the phase of interval lengths is within one tick per
+  // interval of this, which the generator tracks exactly as it runs.
+  return level_sum(base, level) * z.num / z.den;
+}
+
+void check(int64_t value, int64_t low, int64_t high, const char* name) {
+  if (value < low || value > high)
+    throw std::invalid_argument(std::string(name) + " = " + std::to_string(value) + " is outside " +
+                                std::to_string(low) + ".." + std::to_string(high));
+}
+
+}  // namespace
+
+__int128 RampSpec::accel_phase(int64_t level) const {
+  return ramp_phase(accel_ticks_per_level, base_level, level);
+}
+
+__int128 RampSpec::decel_phase(int64_t level) const {
+  return ramp_phase(decel_ticks_per_level, base_level, level);
+}
+
+int64_t RampSpec::peak_level_for(int64_t distance) const {
+  if (!horner_triangle_rule) return run_level;
+  // STPCALC B1.3.8: the move is triangular when Pulse_A + Pulse_D > total; the peak is
+  // base + R_T * (run - base) (B1.3.6 with Time_A scaled by R_T), R_T = total/(A+D).
+  __int128 both = accel_phase(run_level) + decel_phase(run_level);  // in phase units
+  __int128 total = static_cast<__int128>(distance) * phase_per_step;
+  if (total >= both) return run_level;
+  int64_t rise = static_cast<int64_t>(total * (run_level - base_level) / both);
+  return base_level + rise;
+}
+
+int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5) {
+  int64_t max_useful = (aq5 - aq4) * 10 / 3;  // (AQ5-AQ4)/0.3
+  return max_useful < 27300 ? max_useful : 27300;
+}
+
+RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t aq7) {
+  check(aq3, 20, 65535, "velocity resolution %AQ3");
+  check(aq4, 1, 8190, "base velocity %AQ4");
+  check(aq5, aq4 + 1, 8191, "running velocity %AQ5 (must exceed the base velocity)");
+  check(aq6, 1, horner_max_ramp_ms(aq4, aq5) < 1 ? 1 : horner_max_ramp_ms(aq4, aq5),
+        "acceleration time %AQ6 (ms)");
+  if (aq7 != 0)
+    check(aq7, 1, horner_max_ramp_ms(aq4, aq5) < 1 ? 1 : horner_max_ramp_ms(aq4, aq5),
+          "deceleration time %AQ7 (ms)");
+  if (aq7 == 0) aq7 = aq6;  // SPM30 3.4.6: 0 means "same as acceleration"
+  auto z = [&](int64_t ms) {
+    int64_t num = ms * 24576, den = (aq5 - aq4) * 5;
+    return Rational{(num + den - 1) / den, 1};  // rounded up (B1.3.1)
+  };
+  RampSpec r;
+  r.phase_per_step = 8192 * aq3;  // one level = 600/AQ3 steps/s = level/(8192*AQ3) per tick
+  r.base_level = aq4;
+  r.run_level = aq5;
+  r.accel_ticks_per_level = z(aq6);
+  r.decel_ticks_per_level = z(aq7);
+  r.horner_triangle_rule = true;
+  return r;
+}
+
+}  // namespace stepnode::motion

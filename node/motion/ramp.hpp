@@ -1,0 +1,50 @@
+// How a move's velocity changes, in one description for every front end. Velocity is an
+// integer "level"; a level adds `level` phase units per clock tick and one step is
+// `phase_per_step` phase units, so velocity = level * kClockHz / phase_per_step steps/s.
+// Ramps change the level by one every `ticks_per_level` ticks (a rational number, so a
+// continuous slope in Hz/s is as exact as the Horner module's integer Z_A).
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "node/motion/timebase.hpp"
+
+namespace stepnode::motion {
+
+struct Rational {
+  int64_t num = 0;
+  int64_t den = 1;
+};
+
+struct RampSpec {
+  int64_t phase_per_step = 1;      // D
+  int64_t base_level = 1;          // start/stop velocity
+  int64_t run_level = 2;           // cruise velocity
+  Rational accel_ticks_per_level;  // Z_A
+  Rational decel_ticks_per_level;  // Z_D
+  // The highest level a move of `distance` steps may reach. Horner: STPCALC's peak
+  // velocity for triangular moves (B1.3.6), so the engine never exceeds it.
+  int64_t peak_level_for(int64_t distance) const;
+
+  double velocity_of(int64_t level) const {
+    return static_cast<double>(level) * kClockHz / static_cast<double>(phase_per_step);
+  }
+  // Exact pulses (times phase_per_step) spent going from base to `level` or back:
+  // Z * sum(base+1 .. level).
+  __int128 accel_phase(int64_t level) const;
+  __int128 decel_phase(int64_t level) const;
+
+  // Set for Horner register ramps: the STPCALC triangular rule applies.
+  bool horner_triangle_rule = false;
+};
+
+// The Horner module's ramp from %AQ3..%AQ7 (SPM30 3.4, STPCALC B1.3.1):
+// D = 8192*AQ3, Z_A = ceil(AQ6*24576 / ((AQ5-AQ4)*5)), Z_D the same with AQ7 (0 = AQ6).
+// Throws std::invalid_argument naming the register and its legal range.
+RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t aq7);
+
+// Largest useful acceleration/deceleration time (SPM30 3.4.5): (AQ5-AQ4)/0.3 ms, capped at
+// 27300; beyond it Z would exceed 16384.
+int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5);
+
+}  // namespace stepnode::motion

@@ -1,0 +1,202 @@
+#include "node/motion/step_generator.hpp"
+
+#include <algorithm>
+
+namespace stepnode::motion {
+
+Tick StepGenerator::interval_length(Rational z, int64_t k) const {
+  // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den).
+  Tick len = (k + 1) * z.num / z.den - k * z.num / z.den;
+  return std::max<Tick>(len, 1);
+}
+
+void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
+                          std::optional<int64_t> distance) {
+  ramp_ = ramp;
+  direction_ = direction >= 0 ? +1 : -1;
+  distance_ = distance;
+  steps_done_ = 0;
+  acc_ = 0;
+  t_ = start;
+  stopping_ = false;
+  marks_ = Marks{};
+  marks_.start = start;
+  decel_tick_ = -1;
+  if (distance && *distance <= 0) {
+    phase_ = MotionPhase::Idle;
+    marks_.end = start;
+    return;
+  }
+  peak_level_ = distance ? ramp.peak_level_for(*distance) : ramp.run_level;
+  marks_.peak_level = std::max(peak_level_, ramp.base_level);
+  if (peak_level_ <= ramp.base_level) {
+    phase_ = MotionPhase::Creeping;  // too short to ramp at all: the whole move at base
+    level_ = ramp.base_level;
+    marks_.decel_start = marks_.decel_end = start;
+    return;
+  }
+  // Acceleration intervals run at base+1 .. peak, Z_A ticks each (STPCALC B1.3.7/B1.3.11).
+  phase_ = MotionPhase::Accelerating;
+  level_ = ramp.base_level + 1;
+  interval_index_ = 0;
+  interval_end_ = t_ + interval_length(ramp.accel_ticks_per_level, 0);
+}
+
+std::optional<int64_t> StepGenerator::remaining() const {
+  if (!distance_) return std::nullopt;
+  return *distance_ - steps_done_;
+}
+
+bool StepGenerator::decel_needed() const {
+  // Steps the deceleration ramp yields from here: the phase it adds plus what is already
+  // accumulated, in whole steps.
+  __int128 phase = ramp_.decel_phase(level_) + acc_;
+  return static_cast<__int128>(*remaining()) * ramp_.phase_per_step <= phase;
+}
+
+void StepGenerator::plan_decel() {
+  // The deceleration starts on the exact tick where the phase still to come equals what
+  // the ramp down adds, not on the next step, so running and total times match STPCALC
+  // to a tick even at a few pulses per second.
+  decel_tick_ = -1;
+  if (!distance_ || stopping_) return;
+  const int64_t d = ramp_.phase_per_step;
+  __int128 target = static_cast<__int128>(*distance_) * d - ramp_.decel_phase(level_);
+  __int128 current = static_cast<__int128>(steps_done_) * d + acc_;
+  decel_tick_ = current >= target ? t_ : t_ + static_cast<Tick>((target - current + level_ - 1) / level_);
+}
+
+void StepGenerator::begin_decel() {
+  marks_.decel_start = t_;
+  if (phase_ == MotionPhase::Accelerating) marks_.peak_level = level_;
+  if (level_ <= ramp_.base_level) {
+    phase_ = stopping_ ? MotionPhase::Idle : MotionPhase::Creeping;
+    marks_.decel_end = t_;
+    if (phase_ == MotionPhase::Idle) marks_.end = t_;
+    return;
+  }
+  // Deceleration intervals run at the current level down to base+1, Z_D ticks each.
+  phase_ = MotionPhase::Decelerating;
+  interval_index_ = 0;
+  interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
+}
+
+void StepGenerator::end_interval() {
+  if (phase_ == MotionPhase::Accelerating) {
+    if (level_ >= peak_level_) {
+      phase_ = MotionPhase::Running;
+      marks_.run_start = t_;
+      plan_decel();
+      return;
+    }
+    ++level_;
+    ++interval_index_;
+    interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, interval_index_);
+    return;
+  }
+  // Decelerating.
+  if (level_ <= ramp_.base_level + 1) {
+    level_ = ramp_.base_level;
+    marks_.decel_end = t_;
+    // A move with steps left finishes them at the base velocity (the phase accumulator may
+    // leave one short of the target); a stop ends here.
+    if (stopping_ || !distance_ || *remaining() <= 0) {
+      phase_ = MotionPhase::Idle;
+      marks_.end = t_;
+    } else {
+      phase_ = MotionPhase::Creeping;
+    }
+    return;
+  }
+  --level_;
+  ++interval_index_;
+  interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, interval_index_);
+}
+
+bool StepGenerator::next(Step& out) {
+  const int64_t d = ramp_.phase_per_step;
+  for (;;) {
+    if (phase_ == MotionPhase::Idle) return false;
+    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
+    bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+    if (ramping && t_ + need > interval_end_) {
+      acc_ += level_ * (interval_end_ - t_);  // stays below d: no step in this stretch
+      t_ = interval_end_;
+      end_interval();
+      continue;
+    }
+    if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
+      acc_ += level_ * (decel_tick_ - t_);
+      t_ = decel_tick_;
+      begin_decel();
+      continue;
+    }
+    t_ += need;
+    acc_ += level_ * need - d;
+    ++steps_done_;
+    switch (phase_) {
+      case MotionPhase::Accelerating: ++marks_.accel_steps; break;
+      case MotionPhase::Running: ++marks_.run_steps; break;
+      case MotionPhase::Decelerating: ++marks_.decel_steps; break;
+      default: ++marks_.creep_steps; break;
+    }
+    out = Step{t_, direction_};
+    if (distance_ && steps_done_ >= *distance_) {
+      phase_ = MotionPhase::Idle;
+      marks_.end = t_;
+      if (marks_.decel_end < 0) marks_.decel_end = t_;
+    } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
+      // A ramp without a peak cap may have to turn before reaching the running velocity.
+      begin_decel();
+    }
+    return true;
+  }
+}
+
+std::optional<Tick> StepGenerator::peek() {
+  StepGenerator copy = *this;
+  Step s;
+  if (!copy.next(s)) return std::nullopt;
+  return s.time;
+}
+
+void StepGenerator::advance_to(Tick at) {
+  // Moves time forward to `at` without taking a step (the caller has taken every step
+  // due before `at`); ramp intervals that end on the way are processed.
+  const int64_t d = ramp_.phase_per_step;
+  while (phase_ != MotionPhase::Idle && t_ < at) {
+    Tick need = (d - acc_ + level_ - 1) / level_;
+    Tick limit = std::min(at, t_ + need - 1);
+    bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+    if (ramping && interval_end_ <= limit) {
+      acc_ += level_ * (interval_end_ - t_);
+      t_ = interval_end_;
+      end_interval();
+      continue;
+    }
+    acc_ += level_ * (limit - t_);
+    t_ = limit;
+    break;
+  }
+}
+
+void StepGenerator::stop(Tick at) {
+  if (phase_ == MotionPhase::Idle) return;
+  advance_to(at);
+  stopping_ = true;
+  if (phase_ == MotionPhase::Creeping) {
+    phase_ = MotionPhase::Idle;  // already at base velocity: stop now
+    marks_.end = t_;
+  } else if (phase_ != MotionPhase::Decelerating) {
+    begin_decel();
+  }
+}
+
+void StepGenerator::halt(Tick at) {
+  if (phase_ == MotionPhase::Idle) return;
+  t_ = std::max(t_, at);
+  phase_ = MotionPhase::Idle;
+  marks_.end = t_;
+}
+
+}  // namespace stepnode::motion

@@ -1,0 +1,79 @@
+// The pulse engine's core: turns a ramp and a distance into the exact tick of every step.
+// Integer arithmetic only: a phase accumulator adds the velocity level every tick and a
+// step falls when it passes phase_per_step. Steps are computed in closed form per
+// constant-velocity interval, so the cost is O(1) per step at any rate.
+#pragma once
+#include <cstdint>
+#include <optional>
+
+#include "node/motion/ramp.hpp"
+#include "node/motion/timebase.hpp"
+
+namespace stepnode::motion {
+
+enum class MotionPhase { Idle, Accelerating, Running, Decelerating, Creeping };
+
+struct Step {
+  Tick time = 0;
+  int direction = +1;  // +1 up, -1 down
+};
+
+class StepGenerator {
+ public:
+  // Starts a move at `start` in `direction` (+1/-1). With a distance (> 0) the move ends
+  // exactly there; without one it runs until stop() (jog, find home).
+  void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
+  // Computes the next step. Returns false when the move has ended (Idle).
+  bool next(Step& out);
+  // The time the next step would fall, without taking it (nullopt when idle).
+  std::optional<Tick> peek();
+
+  // Decelerate to the base velocity from time `at` and end there (SPM30 %Q15).
+  void stop(Tick at);
+  // End at once, no ramp (immediate stop, limits, e-stop).
+  void halt(Tick at);
+
+  MotionPhase phase() const { return phase_; }
+  bool moving() const { return phase_ != MotionPhase::Idle; }
+  int64_t level() const { return level_; }
+  double velocity() const { return phase_ == MotionPhase::Idle ? 0.0 : ramp_.velocity_of(level_); }
+  int64_t steps_done() const { return steps_done_; }
+  std::optional<int64_t> remaining() const;
+  int direction() const { return direction_; }
+  const RampSpec& ramp() const { return ramp_; }
+  Tick time() const { return t_; }
+
+  // Ticks at which the phases changed during the last move (for STPCALC comparisons).
+  struct Marks {
+    Tick start = 0, run_start = -1, decel_start = -1, decel_end = -1, end = -1;
+    int64_t accel_steps = 0, run_steps = 0, decel_steps = 0, creep_steps = 0;
+    int64_t peak_level = 0;
+  };
+  const Marks& marks() const { return marks_; }
+
+ private:
+  void begin_decel();
+  void advance_to(Tick at);
+  void end_interval();
+  Tick interval_length(Rational z, int64_t index) const;
+  bool decel_needed() const;
+  void plan_decel();
+  void count_step();
+
+  RampSpec ramp_;
+  MotionPhase phase_ = MotionPhase::Idle;
+  int direction_ = +1;
+  std::optional<int64_t> distance_;
+  int64_t peak_level_ = 0;
+  Tick t_ = 0;              // time of the last event (step or level change)
+  int64_t acc_ = 0;         // phase accumulator, 0 <= acc_ < phase_per_step
+  int64_t level_ = 0;
+  Tick interval_end_ = 0;   // end of the current ramp interval
+  int64_t interval_index_ = 0;
+  bool stopping_ = false;   // stop(): no creep after the ramp
+  Tick decel_tick_ = -1;    // while running to a target: the tick deceleration begins
+  int64_t steps_done_ = 0;
+  Marks marks_;
+};
+
+}  // namespace stepnode::motion
