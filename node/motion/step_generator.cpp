@@ -200,3 +200,19 @@ void StepGenerator::halt(Tick at) {
 }
 
 }  // namespace stepnode::motion
+
+namespace stepnode::motion {
+
+void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
+  if (phase_ == MotionPhase::Idle) return;
+  advance_to(at);
+  distance_ = steps_done_ + std::max<int64_t>(steps, 0);
+  ramp_.decel_ticks_per_level = ramp.decel_ticks_per_level;
+  if (steps <= 0) {
+    halt(t_);
+    return;
+  }
+  if (phase_ == MotionPhase::Running) plan_decel();
+}
+
+}  // namespace stepnode::motion

@@ -32,6 +32,10 @@ class StepGenerator {
   void stop(Tick at);
   // End at once, no ramp (immediate stop, limits, e-stop).
   void halt(Tick at);
+  // From time `at`, end the move `steps` steps from here and decelerate with `ramp`'s
+  // deceleration (indexed move: the index input moved the end point). The velocity and
+  // phase carry on; if the new end is too close to ramp down, the ramp starts at once.
+  void retarget(Tick at, int64_t steps, const RampSpec& ramp);
 
   MotionPhase phase() const { return phase_; }
   bool moving() const { return phase_ != MotionPhase::Idle; }

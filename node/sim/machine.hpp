@@ -1,0 +1,72 @@
+// The simulated machine behind the step outputs: per axis a motor that follows steps
+// (unless a fault says otherwise), switches and an encoder that are pure functions of the
+// mechanical position, so the engine knows the exact step at which any input changes.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace stepnode::sim {
+
+// A switch active while the mechanical position is inside [position, position + width).
+struct Cam {
+  int64_t position = 0;
+  int64_t width = 1;
+  bool contains(int64_t p) const { return p >= position && p < position + width; }
+};
+
+enum class EncoderKind : uint8_t { None = 0, Quadrature = 1, UpDown = 2, QuadratureNoMarker = 3 };
+
+struct AxisMachineConfig {
+  std::optional<Cam> home;               // home switch
+  std::optional<Cam> index;              // index input (indexed moves)
+  std::optional<int64_t> lower_limit;    // active at or below this position
+  std::optional<int64_t> upper_limit;    // active at or above this position
+  int64_t steps_per_rev = 2000;          // motor steps (or microsteps) per revolution
+  int64_t encoder_lines = 500;           // encoder lines per revolution
+  EncoderKind encoder = EncoderKind::Quadrature;
+  int64_t marker_offset = 0;             // marker once per revolution, at this offset...
+  int64_t marker_width = 4;              // ...and this many steps wide
+  // Faults.
+  std::optional<int64_t> stall_below, stall_above;  // the motor cannot pass these positions
+  uint32_t miss_every = 0;               // every n-th step is lost (0 = none)
+};
+
+class AxisMachine {
+ public:
+  explicit AxisMachine(AxisMachineConfig config = {}) : config_(config) {}
+
+  // One step pulse from the drive (+1 up, -1 down). The motor follows unless stalled or
+  // the pulse is one of the missed ones.
+  void step(int direction);
+  // External force: the load moved without steps.
+  void displace(int64_t steps) { position_ += steps; }
+
+  int64_t position() const { return position_; }
+  bool home() const { return config_.home && config_.home->contains(position_); }
+  bool index() const { return config_.index && config_.index->contains(position_); }
+  bool lower_limit() const { return config_.lower_limit && position_ <= *config_.lower_limit; }
+  bool upper_limit() const { return config_.upper_limit && position_ >= *config_.upper_limit; }
+  bool marker() const;
+  // Encoder counts: 4 per line for quadrature (x4 decoding), 1 per line for up/down;
+  // 0 without an encoder.
+  int64_t encoder_count() const;
+  int64_t encoder_counts_per_rev() const;
+  uint64_t pulses_received() const { return pulses_; }
+
+  AxisMachineConfig& config() { return config_; }
+  const AxisMachineConfig& config() const { return config_; }
+
+ private:
+  AxisMachineConfig config_;
+  int64_t position_ = 0;
+  uint64_t pulses_ = 0;
+};
+
+// The whole machine: the axes and the inputs they share.
+struct Machine {
+  std::vector<AxisMachine> axes;
+  bool emergency_stop = false;  // the e-stop input is active
+};
+
+}  // namespace stepnode::sim
