@@ -132,6 +132,7 @@ void CanopenNode::handle_nmt(NmtCommand command, uint64_t now_us) {
 }
 
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+  if (on_advance) on_advance(now_us);
   if (auto command = decode_nmt(frame, node_id())) {
     handle_nmt(*command, now_us);
     return;
@@ -154,6 +155,7 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
 }
 
 void CanopenNode::on_tick(uint64_t now_us) {
+  if (on_advance) on_advance(now_us);
   consumer_.on_tick(now_us);
   if (state_ == NmtState::Initialising) return;
   heartbeat_.on_tick(state_, now_us);

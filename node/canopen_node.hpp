@@ -52,6 +52,9 @@ class CanopenNode {
   std::function<void(uint8_t node, uint64_t now_us)> on_heartbeat_lost;
   std::function<void(NmtState state, uint64_t now_us)> on_state_change;
   std::function<void(uint64_t now_us)> on_reset_application;
+  // Brings the application up to `now_us`; called before every frame and tick, so a
+  // command in a frame acts on an application that is current to the microsecond.
+  std::function<void(uint64_t now_us)> on_advance;
 
  private:
   void install_service_hooks();

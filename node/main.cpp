@@ -8,6 +8,7 @@
 
 #include "node/canopen_node.hpp"
 #include "node/config.hpp"
+#include "node/motion_service.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/socketcan.hpp"
 #include "od/eds.hpp"
@@ -36,6 +37,10 @@ int run(const node::NodeConfig& cfg) {
   canio::SocketCan can(cfg.iface);
   node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
   node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults);
+  node::MotionService motion(canopen.dictionary(), cfg.options.device, canopen.emcy());
+  canopen.on_advance = [&motion](uint64_t now) { motion.advance(now); };
+  canopen.on_reset_application = [&motion](uint64_t now) { motion.power_up(now); };
+  canopen.on_heartbeat_lost = [&motion](uint8_t, uint64_t now) { motion.master_lost(now); };
 
   canio::EventLoop loop;
   loop.stop_on_signals();

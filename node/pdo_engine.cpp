@@ -1,5 +1,7 @@
 #include "node/pdo_engine.hpp"
 
+#include <algorithm>
+
 namespace stepnode::node {
 namespace {
 
@@ -46,6 +48,20 @@ void PdoEngine::reload() {
     t.inhibit_us = uint64_t{dictionary_.get<uint16_t>(tc, 3)} * 100;
     t.event_us = uint64_t{dictionary_.get<uint16_t>(tc, 5)} * 1000;
     t.sync_start = dictionary_.get<uint8_t>(tc, 6);
+    // Event bits: the non-sampled entries, or all of them when every entry is sampled
+    // (a TPDO of positions streams on change, limited by its inhibit time).
+    t.event_mask.assign(od::mapping_bytes(t.mapping), 0);
+    bool any_event = false;
+    size_t offset = 0;
+    for (const auto& m : t.mapping) {
+      const od::Entry* e = m.dummy() ? nullptr : dictionary_.find(m.index, m.sub);
+      if (e && !e->pdo_sampled) {
+        od::write_bits(t.event_mask, offset, ~uint64_t{0}, m.bits);
+        any_event = true;
+      }
+      offset += m.bits;
+    }
+    if (!any_event) std::fill(t.event_mask.begin(), t.event_mask.end(), 0xFF);
     if (t.valid && !was_valid) {
       // A PDO that (re)appears starts fresh and, if event-driven, sends its values once.
       t.last_data.clear();
@@ -176,7 +192,9 @@ void PdoEngine::on_tick(uint64_t now_us) {
   for (auto& t : tpdos_) {
     if (!t.valid || t.type <= 240) continue;
     std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
-    bool changed = !t.sent_any || data != t.last_data;
+    bool changed = !t.sent_any || t.last_data.size() != data.size();
+    for (size_t i = 0; !changed && i < data.size(); ++i)
+      changed = ((data[i] ^ t.last_data[i]) & t.event_mask[i]) != 0;
     bool timer = t.event_us && now_us - t.last_sent_us >= t.event_us;
     if (!(changed || timer || t.send_request)) continue;
     if (t.sent_any && now_us - t.last_sent_us < t.inhibit_us) continue;  // retried next tick

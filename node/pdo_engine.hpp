@@ -61,6 +61,7 @@ class PdoEngine {
     od::PdoMapping mapping;
     // runtime
     std::vector<uint8_t> last_data;
+    std::vector<uint8_t> event_mask;  // bits whose change is an event (see Entry::pdo_sampled)
     bool sent_any = false, send_request = false, event_pending = false;
     bool waiting_sync_start = false;
     uint64_t last_sent_us = 0;

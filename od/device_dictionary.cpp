@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "od/axis_objects.hpp"
 #include "od/can_frame.hpp"
 #include "od/pdo_mapping.hpp"
 
@@ -259,6 +260,7 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);
   }
   add_user_objects(od);
+  add_axis_objects(od, info);
 }
 
 }  // namespace stepnode::od

@@ -28,6 +28,9 @@ struct Entry {
   DataType type = DataType::Unsigned8;
   Access access = Access::ReadOnly;
   bool pdo_mappable = false;
+  // A sampled value (a position while moving) does not by itself make an event-driven
+  // TPDO go out when the TPDO also carries values that are events (status bits).
+  bool pdo_sampled = false;
   bool persistent = false;  // saved by 0x1010, brought back by 0x1011 / restart
   Bytes default_value;
   std::string eds_default;  // EDS DefaultValue when it is an expression ("$NODEID+0x180")

@@ -1,0 +1,51 @@
+// Connects the axes and the simulated machine to the object dictionary: command bits and
+// words written over SDO or RPDO act on the axes at once; status, positions and velocity
+// are published back into the dictionary (and so into the TPDOs) after every advance.
+// Axis errors raise an EMCY (manufacturer code 0xFF00 + axis number) until cleared.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "node/emcy.hpp"
+#include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
+#include "od/device_dictionary.hpp"
+#include "od/dictionary.hpp"
+
+namespace stepnode::node {
+
+class MotionService {
+ public:
+  MotionService(od::Dictionary& dictionary, const od::DeviceInfo& info, EmcyProducer& emcy);
+
+  // Brings every axis up to `now_us` (CLOCK_MONOTONIC or virtual) and publishes.
+  void advance(uint64_t now_us);
+  // Power-up / NMT reset node: axes back to the power-up state, settings reloaded.
+  void power_up(uint64_t now_us);
+  // Heartbeat consumer timeout: every moving axis ramps down, %I8 latches.
+  void master_lost(uint64_t now_us);
+
+  motion::Axis& axis(unsigned n) { return *axes_.at(n); }
+  sim::Machine& machine() { return machine_; }
+  motion::Tick ticks(uint64_t now_us) const;
+
+ private:
+  void install_hooks();
+  void load_words(unsigned a);
+  void load_config(unsigned a);
+  void load_machine(unsigned a);
+  void publish(unsigned a);
+  void on_axis_event(unsigned a, const motion::AxisEvent& event);
+
+  od::Dictionary& dictionary_;
+  EmcyProducer& emcy_;
+  unsigned count_;
+  sim::Machine machine_;
+  std::vector<std::unique_ptr<motion::Axis>> axes_;
+  uint64_t epoch_us_ = 0;
+  bool epoch_set_ = false;
+  uint64_t now_us_ = 0;
+};
+
+}  // namespace stepnode::node

@@ -1,0 +1,165 @@
+#include "od/axis_objects.hpp"
+
+#include <string>
+
+#include "od/can_frame.hpp"
+
+namespace stepnode::od {
+namespace {
+
+using DT = DataType;
+using AC = Access;
+
+template <class T>
+void limits(Entry& e, T low, T high) {
+  e.low = encode<T>(low);
+  e.high = encode<T>(high);
+}
+
+std::string axis_name(unsigned axis, const char* what) {
+  return "Axis " + std::to_string(axis + 1) + " " + what;
+}
+
+void add_registers(Dictionary& od, unsigned a) {
+  using namespace axis_obj;
+  Entry& cmd = od.var(index(a, kCommandBits), axis_name(a, "command bits"), DT::Unsigned16, AC::ReadWrite,
+                      encode<uint16_t>(0), true);
+  cmd.persistent = false;  // commands are edges, never stored
+  od.var(index(a, kStatusBits), axis_name(a, "status bits"), DT::Unsigned16, AC::ReadOnly,
+         encode<uint16_t>(0x0080), true);
+  Entry& dest = od.var(index(a, kDestination), axis_name(a, "destination position"), DT::Integer32,
+                       AC::ReadWrite, encode<int32_t>(0), true);
+  limits<int32_t>(dest, -8'388'608, 8'388'607);  // SPM30 3.4 / STP100 table 4.1
+  dest.persistent = false;
+
+  Object& prof = od.record(index(a, kProfile), axis_name(a, "motion profile"));
+  limits<uint16_t>(prof.add(profile_sub::kVelocityDivisor, "Velocity divisor", DT::Unsigned16,
+                            AC::ReadWrite, encode<uint16_t>(600), true), 20, 65535);
+  limits<uint16_t>(prof.add(profile_sub::kBaseVelocity, "Base velocity", DT::Unsigned16, AC::ReadWrite,
+                            encode<uint16_t>(100), true), 1, 8190);
+  limits<uint16_t>(prof.add(profile_sub::kRunningVelocity, "Running velocity", DT::Unsigned16,
+                            AC::ReadWrite, encode<uint16_t>(1000), true), 2, 8191);
+  limits<uint16_t>(prof.add(profile_sub::kAcceleration, "Acceleration time ms", DT::Unsigned16,
+                            AC::ReadWrite, encode<uint16_t>(500), true), 1, 27300);
+  limits<uint16_t>(prof.add(profile_sub::kDeceleration, "Deceleration time ms", DT::Unsigned16,
+                            AC::ReadWrite, encode<uint16_t>(0), true), 0, 27300);
+
+  Object& idx = od.record(index(a, kIndexedMove), axis_name(a, "indexed move"));
+  limits<uint32_t>(idx.add(indexed_sub::kDestination, "Indexed destination", DT::Unsigned32,
+                           AC::ReadWrite, encode<uint32_t>(0), true), 0, 16'777'215);
+  limits<uint16_t>(idx.add(indexed_sub::kDeceleration, "Indexed deceleration time ms", DT::Unsigned16,
+                           AC::ReadWrite, encode<uint16_t>(0), true), 0, 27300);
+  limits<uint32_t>(idx.add(indexed_sub::kWindowOpen, "Index window open", DT::Unsigned32, AC::ReadWrite,
+                           encode<uint32_t>(0), true), 0, 16'777'215);
+  limits<uint32_t>(idx.add(indexed_sub::kWindowClose, "Index window close", DT::Unsigned32, AC::ReadWrite,
+                           encode<uint32_t>(16'777'215), true), 0, 16'777'215);
+
+  // Positions and velocity are sampled values (Entry::pdo_sampled).
+  od.var(index(a, kMotorPosition), axis_name(a, "motor position"), DT::Integer32, AC::ReadOnly,
+         encode<int32_t>(0), true).pdo_sampled = true;
+  od.var(index(a, kEncoderPosition), axis_name(a, "encoder position"), DT::Integer32, AC::ReadOnly,
+         encode<int32_t>(0), true).pdo_sampled = true;
+  od.var(index(a, kVelocity), axis_name(a, "velocity steps/s"), DT::Integer32, AC::ReadOnly,
+         encode<int32_t>(0), true).pdo_sampled = true;
+  od.var(index(a, kMotionPhase), axis_name(a, "motion phase"), DT::Unsigned8, AC::ReadOnly, {0}, true);
+
+  Object& cfg = od.record(index(a, kConfiguration), axis_name(a, "configuration"));
+  limits<uint8_t>(cfg.add(config_sub::kEncoderType, "Encoder type (0 none, 1 quad, 2 up/down, 3 quad no marker)",
+                          DT::Unsigned8, AC::ReadWrite, {0}), 0, 3);
+  limits<uint8_t>(cfg.add(config_sub::kMultiplier, "Encoder multiplier", DT::Unsigned8, AC::ReadWrite, {1}), 1, 255);
+  limits<uint8_t>(cfg.add(config_sub::kDivisor, "Encoder divisor", DT::Unsigned8, AC::ReadWrite, {1}), 1, 16);
+  cfg.add(config_sub::kTolerance, "Encoder tolerance", DT::Unsigned8, AC::ReadWrite, {0});
+  cfg.add(config_sub::kStallDetection, "Stall detection", DT::Boolean, AC::ReadWrite, {0});
+  cfg.add(config_sub::kHomeMethod, "Simple find-home method", DT::Boolean, AC::ReadWrite, {0});
+  cfg.add(config_sub::kOriginSource, "Origin source is the encoder marker", DT::Boolean, AC::ReadWrite, {0});
+  cfg.add(config_sub::kLimitQualified, "Limit-switch-qualified find home", DT::Boolean, AC::ReadWrite, {0});
+  cfg.add(config_sub::kLimitStartedMoves, "Limit-switch-started moves", DT::Boolean, AC::ReadWrite, {0});
+  cfg.add(config_sub::kIndexedMoves, "Indexed moves enabled", DT::Boolean, AC::ReadWrite, {1});
+  od.var(index(a, kDirOutput), axis_name(a, "DIR output"), DT::Boolean, AC::ReadOnly, {0}, true);
+}
+
+void add_machine(Dictionary& od, unsigned a) {
+  using namespace sim_obj;
+  auto name = [a](const char* what) { return "Simulated axis " + std::to_string(a + 1) + " " + what; };
+  Object& sw = od.record(index(a, kSwitches), name("switches"));
+  sw.add(switches_sub::kHomePosition, "Home switch position", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  sw.add(switches_sub::kHomeWidth, "Home switch width (0 = none)", DT::Integer32, AC::ReadWrite, encode<int32_t>(50));
+  sw.add(switches_sub::kLowerLimitEnabled, "Lower limit present", DT::Boolean, AC::ReadWrite, {1});
+  sw.add(switches_sub::kLowerLimit, "Lower limit position", DT::Integer32, AC::ReadWrite, encode<int32_t>(-100000));
+  sw.add(switches_sub::kUpperLimitEnabled, "Upper limit present", DT::Boolean, AC::ReadWrite, {1});
+  sw.add(switches_sub::kUpperLimit, "Upper limit position", DT::Integer32, AC::ReadWrite, encode<int32_t>(100000));
+  sw.add(switches_sub::kIndexPosition, "Index input position", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  sw.add(switches_sub::kIndexWidth, "Index input width (0 = none)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  Object& enc = od.record(index(a, kEncoder), name("encoder"));
+  limits<int32_t>(enc.add(encoder_sub::kStepsPerRev, "Steps per revolution", DT::Integer32, AC::ReadWrite,
+                          encode<int32_t>(2000)), 1, 1'000'000);
+  limits<int32_t>(enc.add(encoder_sub::kLines, "Encoder lines per revolution", DT::Integer32, AC::ReadWrite,
+                          encode<int32_t>(500)), 1, 1'000'000);
+  enc.add(encoder_sub::kMarkerOffset, "Marker offset", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  limits<int32_t>(enc.add(encoder_sub::kMarkerWidth, "Marker width", DT::Integer32, AC::ReadWrite,
+                          encode<int32_t>(4)), 1, 1'000'000);
+  Object& f = od.record(index(a, kFaults), name("faults"));
+  f.add(faults_sub::kStallBelowEnabled, "Jam below a position", DT::Boolean, AC::ReadWrite, {0});
+  f.add(faults_sub::kStallBelow, "Jam position (low)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  f.add(faults_sub::kStallAboveEnabled, "Jam above a position", DT::Boolean, AC::ReadWrite, {0});
+  f.add(faults_sub::kStallAbove, "Jam position (high)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  f.add(faults_sub::kMissEvery, "Lose every n-th step (0 = none)", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
+  Entry& push = f.add(faults_sub::kDisplace, "Displace the load by steps", DT::Integer32, AC::WriteOnly,
+                      encode<int32_t>(0));
+  push.persistent = false;
+  od.var(index(a, kMechanicalPosition), name("mechanical position"), DT::Integer32, AC::ReadOnly,
+         encode<int32_t>(0), true);
+  od.var(index(a, kInputs), name("inputs"), DT::Unsigned8, AC::ReadOnly, {0}, true);
+}
+
+// Default PDOs of axis a: its four RPDOs and TPDOs (numbers 4a+1..4a+4). A master runs an
+// axis with no SDO at all; axis 1 uses the pre-defined connection set IDs, the others
+// start disabled (bit 31) so they cannot collide with another node's PDOs until the
+// integrator gives them IDs.
+void map_pdo(Dictionary& od, uint16_t map_index, std::initializer_list<uint32_t> words) {
+  uint8_t n = 0;
+  for (uint32_t w : words) {
+    Entry& e = od.at(map_index, ++n);
+    e.default_value = e.value = encode<uint32_t>(w);
+  }
+  Entry& count = od.at(map_index, 0);
+  count.default_value = count.value = {n};
+}
+
+uint32_t word(uint16_t index, uint8_t sub, uint8_t bits) {
+  return (static_cast<uint32_t>(index) << 16) | (static_cast<uint32_t>(sub) << 8) | bits;
+}
+
+void add_default_pdos(Dictionary& od, unsigned a) {
+  using namespace axis_obj;
+  unsigned first = 4 * a;
+  auto rmap = [&](unsigned k) { return static_cast<uint16_t>(0x1600 + first + k); };
+  auto tmap = [&](unsigned k) { return static_cast<uint16_t>(0x1A00 + first + k); };
+  map_pdo(od, rmap(0), {word(index(a, kCommandBits), 0, 16), word(index(a, kDestination), 0, 32)});
+  uint16_t p = index(a, kProfile);
+  map_pdo(od, rmap(1), {word(p, 1, 16), word(p, 2, 16), word(p, 3, 16), word(p, 4, 16)});
+  uint16_t ix = index(a, kIndexedMove);
+  map_pdo(od, rmap(2), {word(p, 5, 16), word(ix, 2, 16), word(ix, 1, 32)});
+  map_pdo(od, rmap(3), {word(ix, 3, 32), word(ix, 4, 32)});
+  map_pdo(od, tmap(0), {word(index(a, kStatusBits), 0, 16), word(index(a, kMotorPosition), 0, 32)});
+  map_pdo(od, tmap(1), {word(index(a, kMotorPosition), 0, 32), word(index(a, kEncoderPosition), 0, 32)});
+  map_pdo(od, tmap(2), {word(index(a, kVelocity), 0, 32), word(index(a, kMotionPhase), 0, 8)});
+  // Positions stream at most every 10 ms while moving (inhibit time, 100 us units).
+  for (unsigned k : {1u, 2u}) {
+    Entry& inhibit = od.at(static_cast<uint16_t>(0x1800 + first + k), 3);
+    inhibit.default_value = inhibit.value = encode<uint16_t>(100);
+  }
+}
+
+}  // namespace
+
+void add_axis_objects(Dictionary& od, const DeviceInfo& info) {
+  for (unsigned a = 0; a < info.axes; ++a) {
+    add_registers(od, a);
+    add_machine(od, a);
+    add_default_pdos(od, a);
+  }
+  od.var(sim_obj::kEmergencyStop, "Simulated emergency stop input", DT::Boolean, AC::ReadWrite, {0}).persistent = false;
+}
+
+}  // namespace stepnode::od
