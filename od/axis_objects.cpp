@@ -82,7 +82,7 @@ void add_machine(Dictionary& od, unsigned a) {
   using namespace sim_obj;
   auto name = [a](const char* what) { return "Simulated axis " + std::to_string(a + 1) + " " + what; };
   Object& sw = od.record(index(a, kSwitches), name("switches"));
-  sw.add(switches_sub::kHomePosition, "Home switch position", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
+  sw.add(switches_sub::kHomePosition, "Home switch position", DT::Integer32, AC::ReadWrite, encode<int32_t>(1000));
   sw.add(switches_sub::kHomeWidth, "Home switch width (0 = none)", DT::Integer32, AC::ReadWrite, encode<int32_t>(50));
   sw.add(switches_sub::kLowerLimitEnabled, "Lower limit present", DT::Boolean, AC::ReadWrite, {1});
   sw.add(switches_sub::kLowerLimit, "Lower limit position", DT::Integer32, AC::ReadWrite, encode<int32_t>(-100000));

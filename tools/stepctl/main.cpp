@@ -12,6 +12,7 @@
 #include "tools/stepctl/master_bus.hpp"
 #include "tools/stepctl/object_catalog.hpp"
 #include "tools/stepctl/watch.hpp"
+#include "tools/stepctl/axis_commands.hpp"
 
 using namespace stepnode;
 using namespace stepnode::tools;
@@ -175,6 +176,28 @@ int main(int argc, char** argv) {
   watch->add_flag("--passive", passive, "never send (do not read PDO mappings over SDO)");
   watch->add_option("--seconds", seconds, "stop after this many seconds (0 = until Ctrl-C)");
 
+  // Axis commands: stepctl clear|home up|move abs 1000|jog up|stop|estop|status --node N --axis A
+  std::vector<std::string> axis_words;
+  int axis = 1;
+  double jog_seconds = 1.0;
+  bool quiet = false;
+  auto add_axis_command = [&](const char* name, const char* help) {
+    auto* sub = app.add_subcommand(name, help);
+    sub->add_option("args", axis_words, "e.g. up|down, abs|rel POSITION");
+    sub->add_option("--node", node, "node id 1..127")->required()->check(CLI::Range(1, 127));
+    sub->add_option("--axis", axis, "axis 1..8")->capture_default_str()->check(CLI::Range(1, 8));
+    sub->add_flag("--quiet", quiet, "no live progress line");
+    return sub;
+  };
+  add_axis_command("clear", "axis: Clear Errors (%Q14)");
+  add_axis_command("home", "axis: Find Home up|down (%Q4/%Q5), with live progress");
+  add_axis_command("move", "axis: move abs|rel POSITION (%Q9/%Q8), with live progress");
+  add_axis_command("jog", "axis: jog up|down for --seconds (level-sensitive %Q6/%Q7)")
+      ->add_option("--seconds", jog_seconds, "how long the jog bit stays on")->capture_default_str();
+  add_axis_command("stop", "axis: Decelerate and Stop (%Q15)");
+  add_axis_command("estop", "axis: Immediate Stop (%Q16)");
+  add_axis_command("status", "axis: status bits in words, motor and encoder position");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -191,6 +214,16 @@ int main(int argc, char** argv) {
     if (*read) return cmd_read(bus, catalog, node, object, block, output);
     if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
     if (*dump) return cmd_dump(bus, catalog, node);
+    for (const char* verb : {"clear", "home", "move", "jog", "stop", "estop", "status"}) {
+      if (!*app.get_subcommand(verb)) continue;
+      std::vector<std::string> words{verb};
+      words.insert(words.end(), axis_words.begin(), axis_words.end());
+      try {
+        return run_axis_command(bus, node, axis, words, jog_seconds, quiet);
+      } catch (const std::runtime_error& e) {  // the node refused (bad words are exit 2)
+        throw Failure(e.what());
+      }
+    }
   } catch (const Failure& e) {
     std::fprintf(stderr, "stepctl: %s\n", e.what());
     return 1;
