@@ -428,6 +428,15 @@ void Axis::advance_to(Tick now) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Clear && origin_inactive_since_)
       deadline = *origin_inactive_since_ + kOriginDwellTicks;
     std::optional<Tick> next = generator_.peek();
+    if (!next && generator_.moving()) {
+      // The ramp ends between steps (a stop at base velocity): go idle when it ends.
+      StepGenerator ahead = generator_;
+      Step none;
+      ahead.next(none);
+      if (ahead.marks().end > now) break;
+      generator_.next(none);
+      continue;
+    }
     if (deadline && *deadline <= now && (!next || *next > *deadline)) {
       generator_.halt(*deadline);
       home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin

@@ -62,5 +62,25 @@ TEST(AxisSmoke, FindHomeNormalMethodStopsPreciselyAtHome) {
   EXPECT_EQ(m.position(), 5000);
 }
 
+// SPM30 JOG: releasing the bit decelerates to base and stops; the ramp may end between
+// steps, and the axis must still come to rest (a regression: it stayed "decelerating").
+TEST(AxisSmoke, JogReleaseEndsInStandstill) {
+  sim::AxisMachine m;
+  bool estop = false;
+  Axis axis({}, {&m}, &estop);
+  axis.write_commands(command::kClearErrors, 0);
+  axis.write_commands(0, 1);
+  axis.write_commands(command::kJogDown, 10);
+  axis.advance_to(kClockHz);
+  EXPECT_EQ(axis.phase(), MotionPhase::Running);
+  axis.write_commands(0, kClockHz);
+  EXPECT_TRUE(axis.status() & status::kDecelerating);
+  axis.advance_to(3 * kClockHz);
+  EXPECT_EQ(axis.phase(), MotionPhase::Idle);
+  EXPECT_FALSE(axis.status() & status::kMoving);
+  EXPECT_EQ(m.position(), axis.motor_position());
+  EXPECT_LT(axis.motor_position(), -500);
+}
+
 }  // namespace
 }  // namespace stepnode::motion
