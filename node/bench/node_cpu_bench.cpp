@@ -1,0 +1,104 @@
+// The node's CPU share while three axes each run at 245,730 steps/s in real time: the real
+// CanopenNode + MotionService, ticked every 1 ms on CLOCK_MONOTONIC exactly as the process
+// does (no CAN socket: frames go to a counter). Prints the figures; asserts nothing.
+//   build/node/node_cpu_bench [--seconds 10] [--tick-us 1000]
+#include <sys/resource.h>
+#include <time.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "node/canopen_node.hpp"
+#include "node/motion_service.hpp"
+#include "od/axis_objects.hpp"
+
+using namespace stepnode;
+
+namespace {
+
+uint64_t now_us() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000u + static_cast<uint64_t>(ts.tv_nsec) / 1000;
+}
+
+double cpu_seconds() {
+  rusage u;
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) / 1e6;
+}
+
+void write(od::Dictionary& od, uint16_t index, uint8_t sub, od::Bytes v) {
+  if (od.write(index, sub, v) != od::SdoAbort::None) {
+    std::fprintf(stderr, "write %04X:%02X refused\n", index, sub);
+    std::exit(1);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  double seconds = 10;
+  uint64_t tick_us = 1000;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--tick-us")) tick_us = std::strtoull(argv[i + 1], nullptr, 10);
+  }
+  node::NodeOptions options;
+  options.device.axes = 3;
+  options.state_dir = std::filesystem::temp_directory_path() / "stepnode-bench";
+  uint64_t frames = 0;
+  node::CanopenNode canopen(options, [&frames](const od::CanFrame&) { ++frames; });
+  node::MotionService motion(canopen.dictionary(), options.device, canopen.emcy());
+  canopen.on_advance = [&motion](uint64_t t) { motion.advance(t); };
+  canopen.on_reset_application = [&motion](uint64_t t) { motion.power_up(t); };
+  uint64_t t0 = now_us();
+  canopen.start(t0);
+  canopen.on_frame(od::CanFrame(0, {0x01, 0}), t0);  // NMT start: TPDOs flow as on a bus
+
+  od::Dictionary& od = canopen.dictionary();
+  using namespace od::axis_obj;
+  for (unsigned a = 0; a < 3; ++a) {
+    uint16_t p = index(a, kProfile);
+    write(od, p, od::profile_sub::kVelocityDivisor, od::encode<uint16_t>(20));  // 30 steps/s units
+    write(od, p, od::profile_sub::kBaseVelocity, od::encode<uint16_t>(1));
+    write(od, p, od::profile_sub::kRunningVelocity, od::encode<uint16_t>(8191));  // 245,730 steps/s
+    write(od, p, od::profile_sub::kAcceleration, od::encode<uint16_t>(100));
+    write(od, od::sim_obj::index(a, od::sim_obj::kSwitches), od::switches_sub::kLowerLimitEnabled, {0});
+    write(od, od::sim_obj::index(a, od::sim_obj::kSwitches), od::switches_sub::kUpperLimitEnabled, {0});
+    write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 13));  // clear errors
+    write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(0));
+    write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 5));  // jog up: runs until released
+  }
+
+  uint64_t start = now_us();
+  double cpu0 = cpu_seconds();
+  timespec next;
+  clock_gettime(CLOCK_MONOTONIC, &next);
+  uint64_t ticks = 0;
+  while (now_us() - start < static_cast<uint64_t>(seconds * 1e6)) {
+    next.tv_nsec += static_cast<long>(tick_us * 1000);
+    while (next.tv_nsec >= 1'000'000'000) {
+      next.tv_nsec -= 1'000'000'000;
+      ++next.tv_sec;
+    }
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    canopen.on_tick(now_us());
+    ++ticks;
+  }
+  double wall = static_cast<double>(now_us() - start) / 1e6;
+  double cpu = cpu_seconds() - cpu0;
+  int64_t steps = 0;
+  for (unsigned a = 0; a < 3; ++a) steps += motion.axis(a).motor_position();
+  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", motion.axis(0).velocity());
+  std::printf("wall time            %.2f s, %llu ticks of %llu us\n", wall,
+              static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(tick_us));
+  std::printf("steps generated      %lld (%.0f steps/s in total)\n", static_cast<long long>(steps),
+              static_cast<double>(steps) / wall);
+  std::printf("frames sent          %llu\n", static_cast<unsigned long long>(frames));
+  std::printf("cpu_share_percent    %.1f  (of one core)\n", 100.0 * cpu / wall);
+  return 0;
+}
