@@ -1,0 +1,68 @@
+"""Interoperability: a third-party CANopen master (node-canopen, npm "canopen", with the
+npm "socketcan" transport) drives a stepnode over vcan.
+
+The master is vcan-tests/interop/master.js; it prints one line per check and exits
+non-zero at the first failure with the frames of that check. Its npm packages are
+installed into vcan-tests/interop/node_modules by tools/setup (npm ci); without them
+this test fails instead of skipping, so CI cannot silently lose it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import CHANNEL, REPO_ROOT
+
+INTEROP = REPO_ROOT / "vcan-tests" / "interop"
+NODE_ID = 9
+# node under User-Mode Linux is slow: the session takes ~10 s natively, allow far more.
+TIMEOUT = float(os.environ.get("INTEROP_TIMEOUT", "300"))
+
+
+def node_binary() -> str:
+    for cand in ("/usr/bin/node", shutil.which("node"), shutil.which("nodejs")):
+        if cand and os.access(cand, os.X_OK):
+            return cand
+    pytest.fail("node (Node.js) is not installed: run tools/setup (installs Debian's nodejs and npm)",
+                pytrace=False)
+
+
+def test_node_canopen_master_drives_stepnode(start_node, tmp_path):
+    modules = INTEROP / "node_modules"
+    if not (modules / "canopen").is_dir() or not (modules / "socketcan").is_dir():
+        pytest.fail(f"{modules} is missing (node-canopen and socketcan): run tools/setup "
+                    "(it runs `npm ci` in vcan-tests/interop)", pytrace=False)
+
+    node = start_node(NODE_ID)
+    eds_out = tmp_path / f"node{NODE_ID}-from-sdo.eds"
+    argv = [node_binary(), str(INTEROP / "master.js"), "--iface", CHANNEL, "--node", str(NODE_ID),
+            "--eds-out", str(eds_out), "--timeout", str(int(TIMEOUT))]
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run(argv, cwd=str(INTEROP), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, timeout=TIMEOUT + 30)
+    except subprocess.TimeoutExpired as e:
+        out = (e.stdout or b"").decode(errors="replace")
+        pytest.fail(f"master.js did not finish within {TIMEOUT + 30:.0f} s\n$ {' '.join(argv)}\n{out}\n"
+                    f"--- stepnode log ---\n{node.log()[-4000:]}", pytrace=False)
+    took = time.monotonic() - t0
+    out = proc.stdout.decode(errors="replace")
+    print(f"$ {' '.join(argv)}\n{out}(master.js: exit {proc.returncode} after {took:.1f} s)")
+
+    assert proc.returncode == 0, (
+        f"node-canopen master failed (exit {proc.returncode} after {took:.1f} s):\n{out}\n"
+        f"--- stepnode log ---\n{node.log()[-4000:]}")
+    assert node.alive, f"stepnode exited during the session (status {node.returncode})"
+    assert "all " in out and " checks passed" in out, out
+    # The EDS the node served by block transfer is the one this build prints.
+    text = eds_out.read_text(errors="replace")
+    assert text.startswith("[FileInfo]"), text[:200]
+    printed = subprocess.run([str(node.argv[0]), "--print-eds"], stdout=subprocess.PIPE, timeout=60,
+                             check=True).stdout.decode(errors="replace")
+    assert text == printed, "the EDS read from 0x1021 differs from `stepnode --print-eds`"
