@@ -45,6 +45,19 @@ int64_t RampSpec::peak_level_for(int64_t distance) const {
   return base_level + rise;
 }
 
+RampSpec frequency_ramp(int64_t min_hz, int64_t max_hz, int64_t slope_mhz_per_s) {
+  if (min_hz < 0 || max_hz < 1 || min_hz > max_hz || slope_mhz_per_s <= 0)
+    throw std::invalid_argument("frequency ramp needs 0 <= min <= max, max >= 1 Hz and a slope > 0");
+  RampSpec r;
+  r.phase_per_step = kClockHz * kLevelsPerHz;
+  r.base_level = min_hz * kLevelsPerHz;
+  r.run_level = max_hz * kLevelsPerHz;
+  // ticks per level = kClockHz / (slope_hz * kLevelsPerHz) = kClockHz * 1000 / (slope_mhz * 64)
+  r.accel_ticks_per_level = Rational{kClockHz * 1000, slope_mhz_per_s * kLevelsPerHz};
+  r.decel_ticks_per_level = r.accel_ticks_per_level;
+  return r;
+}
+
 int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5) {
   int64_t max_useful = (aq5 - aq4) * 10 / 3;  // (AQ5-AQ4)/0.3
   return max_useful < 27300 ? max_useful : 27300;

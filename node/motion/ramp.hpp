@@ -43,6 +43,12 @@ struct RampSpec {
 // Throws std::invalid_argument naming the register and its legal range.
 RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t aq7);
 
+// A continuous-slope ramp given in Hz and Hz/s (HP 44714A PROFILE FREQ): velocity levels of
+// 1/kLevelsPerHz Hz, one level every kClockHz / (slope * kLevelsPerHz) ticks (a rational
+// number, so the slope is exact on average). slope_mhz_per_s is the slope in mHz/s.
+constexpr int64_t kLevelsPerHz = 64;
+RampSpec frequency_ramp(int64_t min_hz, int64_t max_hz, int64_t slope_mhz_per_s);
+
 // Largest useful acceleration/deceleration time (SPM30 3.4.5): (AQ5-AQ4)/0.3 ms, capped at
 // 27300; beyond it Z would exceed 16384.
 int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5);

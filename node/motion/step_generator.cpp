@@ -22,6 +22,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_ = Marks{};
   marks_.start = start;
   decel_tick_ = -1;
+  decel_floor_ = ramp.base_level;
   if (distance && *distance <= 0) {
     phase_ = MotionPhase::Idle;
     marks_.end = start;
@@ -31,7 +32,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_.peak_level = std::max(peak_level_, ramp.base_level);
   if (peak_level_ <= ramp.base_level) {
     phase_ = MotionPhase::Creeping;  // too short to ramp at all: the whole move at base
-    level_ = ramp.base_level;
+    level_ = std::max<int64_t>(ramp.base_level, 1);  // a 0 Hz base still has to move
     marks_.decel_start = marks_.decel_end = start;
     return;
   }
@@ -94,7 +95,13 @@ void StepGenerator::end_interval() {
     interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, interval_index_);
     return;
   }
-  // Decelerating.
+  // Decelerating: to a lower running velocity, or to base.
+  if (decel_floor_ > ramp_.base_level && !stopping_ && level_ <= decel_floor_ + 1) {
+    level_ = decel_floor_;
+    phase_ = MotionPhase::Running;
+    marks_.decel_end = t_;
+    return;
+  }
   if (level_ <= ramp_.base_level + 1) {
     level_ = ramp_.base_level;
     marks_.decel_end = t_;
@@ -105,6 +112,7 @@ void StepGenerator::end_interval() {
       marks_.end = t_;
     } else {
       phase_ = MotionPhase::Creeping;
+      level_ = std::max<int64_t>(level_, 1);
     }
     return;
   }
@@ -202,6 +210,29 @@ void StepGenerator::halt(Tick at) {
 }  // namespace stepnode::motion
 
 namespace stepnode::motion {
+
+void StepGenerator::change_velocity(Tick at, int64_t level) {
+  if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
+  advance_to(at);
+  level = std::max(level, ramp_.base_level);
+  if (level > level_) {
+    // Intervals at level+1 .. target, Z_A each (the same convention as a start).
+    peak_level_ = level;
+    phase_ = MotionPhase::Accelerating;
+    ++level_;
+    interval_index_ = 0;
+    interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, 0);
+  } else if (level < level_) {
+    decel_floor_ = level;
+    peak_level_ = level;
+    phase_ = MotionPhase::Decelerating;
+    marks_.decel_start = t_;
+    interval_index_ = 0;
+    interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
+  } else if (phase_ != MotionPhase::Running) {
+    phase_ = MotionPhase::Running;  // already there: hold it
+  }
+}
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
   if (phase_ == MotionPhase::Idle) return;

@@ -32,6 +32,10 @@ class StepGenerator {
   void stop(Tick at);
   // End at once, no ramp (immediate stop, limits, e-stop).
   void halt(Tick at);
+  // From time `at`, ramp to a new velocity level and hold it (continuous motion without a
+  // destination: HP SUSTAIN, velocity modes). Up with the acceleration, down with the
+  // deceleration of the ramp; never below the base level.
+  void change_velocity(Tick at, int64_t level);
   // From time `at`, end the move `steps` steps from here and decelerate with `ramp`'s
   // deceleration (indexed move: the index input moved the end point). The velocity and
   // phase carry on; if the new end is too close to ramp down, the ramp starts at once.
@@ -75,7 +79,8 @@ class StepGenerator {
   Tick interval_end_ = 0;   // end of the current ramp interval
   int64_t interval_index_ = 0;
   bool stopping_ = false;   // stop(): no creep after the ramp
-  Tick decel_tick_ = -1;    // while running to a target: the tick deceleration begins
+  Tick decel_tick_ = -1;
+  int64_t decel_floor_ = 0;  // the level a deceleration ends at (base, or a lower velocity)    // while running to a target: the tick deceleration begins
   int64_t steps_done_ = 0;
   Marks marks_;
 };
