@@ -56,6 +56,13 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
     if (!n || *n < 1 || *n > static_cast<int64_t>(od::kMaxAxes)) bad("axes", "must be an integer 1..8");
     cfg.options.device.axes = static_cast<unsigned>(*n);
   }
+  if (auto v = t["spm30_multiplexed"]) {
+    auto on = v.value<bool>();
+    if (!on) bad("spm30_multiplexed", "must be true or false");
+    // SPM30 3-axis models: one register set and %Q1..%Q3 select one of three motors.
+    cfg.options.device.spm30_multiplexed = *on;
+    if (*on) cfg.options.device.axes = 1;
+  }
   if (auto v = t["serial_number"]) {
     auto n = v.value<int64_t>();
     if (!n || *n < 0 || *n > 0xFFFFFFFFll) bad("serial_number", "must be an integer 0..4294967295");

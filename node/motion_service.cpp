@@ -10,12 +10,12 @@ using namespace od::axis_obj;
 namespace sim_obj = od::sim_obj;
 
 MotionService::MotionService(od::Dictionary& dictionary, const od::DeviceInfo& info, EmcyProducer& emcy)
-    : dictionary_(dictionary), emcy_(emcy), count_(info.axes) {
-  machine_.axes.resize(count_);
+    : dictionary_(dictionary), emcy_(emcy), count_(info.axes), motors_(od::motor_count(info)) {
+  machine_.axes.resize(motors_);
   for (unsigned a = 0; a < count_; ++a) {
-    axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{},
-                                                   std::vector<sim::AxisMachine*>{&machine_.axes[a]},
-                                                   &machine_.emergency_stop));
+    std::vector<sim::AxisMachine*> motors{&machine_.axes[a]};
+    if (info.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
+    axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, motors, &machine_.emergency_stop));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) { on_axis_event(a, e); };
   }
   install_hooks();
@@ -59,10 +59,10 @@ void MotionService::load_config(unsigned a) {
   cfg.limit_started_moves = u8(od::config_sub::kLimitStartedMoves) != 0;
   cfg.indexed_moves = u8(od::config_sub::kIndexedMoves) != 0;
   axes_[a]->set_config(cfg);
-  machine_.axes[a].config().encoder = cfg.encoder;
+  machine_.axes[a].config().encoder = cfg.encoder;  // the encoder is on the axis' first motor
 }
 
-void MotionService::load_machine(unsigned a) {
+void MotionService::load_machine(unsigned a) {  // a: the motor
   uint16_t sw = sim_obj::index(a, sim_obj::kSwitches), enc = sim_obj::index(a, sim_obj::kEncoder),
            f = sim_obj::index(a, sim_obj::kFaults);
   auto i32 = [&](uint16_t i, uint8_t s) { return int64_t{dictionary_.get<int32_t>(i, s)}; };
@@ -101,17 +101,18 @@ void MotionService::install_hooks() {
     };
     for (auto& [sub, e] : dictionary_.object(index(a, kConfiguration))->entries)
       if (sub) e.on_written = [this, a] { load_config(a); };
+  }
+  for (unsigned m = 0; m < motors_; ++m) {
     for (uint16_t obj : {sim_obj::kSwitches, sim_obj::kEncoder, sim_obj::kFaults})
-      for (auto& [sub, e] : dictionary_.object(sim_obj::index(a, obj))->entries)
-        if (sub) e.on_written = [this, a] {
-            load_machine(a);
-            axes_[a]->advance_to(ticks(now_us_));  // an input may have changed
-            publish(a);
+      for (auto& [sub, e] : dictionary_.object(sim_obj::index(m, obj))->entries)
+        if (sub) e.on_written = [this, m] {
+            load_machine(m);
+            advance(now_us_);  // an input may have changed under a moving axis
           };
-    dictionary_.at(sim_obj::index(a, sim_obj::kFaults), od::faults_sub::kDisplace).on_written = [this, a] {
-      machine_.axes[a].displace(dictionary_.get<int32_t>(sim_obj::index(a, sim_obj::kFaults),
+    dictionary_.at(sim_obj::index(m, sim_obj::kFaults), od::faults_sub::kDisplace).on_written = [this, m] {
+      machine_.axes[m].displace(dictionary_.get<int32_t>(sim_obj::index(m, sim_obj::kFaults),
                                                          od::faults_sub::kDisplace));
-      publish(a);
+      advance(now_us_);
     };
   }
   dictionary_.at(sim_obj::kEmergencyStop, 0).on_written = [this] {
@@ -129,6 +130,9 @@ void MotionService::publish(unsigned a) {
   dictionary_.put<int32_t>(index(a, kVelocity), 0, static_cast<int32_t>(std::lround(v)));
   dictionary_.put<uint8_t>(index(a, kMotionPhase), 0, static_cast<uint8_t>(ax.phase()));
   dictionary_.put<uint8_t>(index(a, kDirOutput), 0, ax.dir_output_high() ? 1 : 0);
+}
+
+void MotionService::publish_motor(unsigned a) {
   const sim::AxisMachine& m = machine_.axes[a];
   dictionary_.put<int32_t>(sim_obj::index(a, sim_obj::kMechanicalPosition), 0, static_cast<int32_t>(m.position()));
   uint8_t inputs = (m.home() ? 1 : 0) | (m.lower_limit() ? 2 : 0) | (m.upper_limit() ? 4 : 0) |
@@ -158,23 +162,26 @@ void MotionService::advance(uint64_t now_us) {
     axes_[a]->advance_to(ticks(now_us));
     publish(a);
   }
+  for (unsigned m = 0; m < motors_; ++m) publish_motor(m);
 }
 
 void MotionService::power_up(uint64_t now_us) {
   advance(now_us);
+  for (unsigned m = 0; m < motors_; ++m) load_machine(m);
   for (unsigned a = 0; a < count_; ++a) {
     load_config(a);
-    load_machine(a);
     axes_[a]->power_up(ticks(now_us));
     load_words(a);
     publish(a);
   }
+  for (unsigned m = 0; m < motors_; ++m) publish_motor(m);
 }
 
 void MotionService::master_lost(uint64_t now_us) {
   now_us_ = now_us;
   for (auto& axis : axes_) axis->master_lost(ticks(now_us));
   for (unsigned a = 0; a < count_; ++a) publish(a);
+  for (unsigned m = 0; m < motors_; ++m) publish_motor(m);
 }
 
 }  // namespace stepnode::node

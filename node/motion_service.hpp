@@ -34,13 +34,15 @@ class MotionService {
   void install_hooks();
   void load_words(unsigned a);
   void load_config(unsigned a);
-  void load_machine(unsigned a);
+  void load_machine(unsigned motor);
   void publish(unsigned a);
+  void publish_motor(unsigned motor);
   void on_axis_event(unsigned a, const motion::AxisEvent& event);
 
   od::Dictionary& dictionary_;
   EmcyProducer& emcy_;
-  unsigned count_;
+  unsigned count_;   // axes (register blocks)
+  unsigned motors_;  // simulated motors (3 behind one axis in SPM30 multiplexed mode)
   sim::Machine machine_;
   std::vector<std::unique_ptr<motion::Axis>> axes_;
   uint64_t epoch_us_ = 0;

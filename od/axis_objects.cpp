@@ -156,9 +156,9 @@ void add_default_pdos(Dictionary& od, unsigned a) {
 void add_axis_objects(Dictionary& od, const DeviceInfo& info) {
   for (unsigned a = 0; a < info.axes; ++a) {
     add_registers(od, a);
-    add_machine(od, a);
     add_default_pdos(od, a);
   }
+  for (unsigned m = 0; m < motor_count(info); ++m) add_machine(od, m);
   od.var(sim_obj::kEmergencyStop, "Simulated emergency stop input", DT::Boolean, AC::ReadWrite, {0}).persistent = false;
 }
 

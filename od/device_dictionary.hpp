@@ -11,6 +11,9 @@ namespace stepnode::od {
 struct DeviceInfo {
   uint8_t node_id = 1;
   unsigned axes = 3;  // 1..8; each axis owns kPdosPerAxis RPDOs and TPDOs
+  // SPM30 3-axis models: one register set (axis 1) multiplexes 3 motors, chosen with
+  // %Q1..%Q3. Then axes = 1 and the simulated machine has 3 motors.
+  bool spm30_multiplexed = false;
   std::string device_name = "stepnode";
   std::string hardware_version = "simulated machine";
   std::string software_version = "0.1.0";
@@ -27,6 +30,8 @@ constexpr unsigned kErrorHistoryLength = 8;
 constexpr size_t kUserDataMaxLength = 4096;
 
 inline unsigned pdo_count(const DeviceInfo& info) { return kPdosPerAxis * info.axes; }
+// Simulated motors (0x5000 blocks): one per axis, or 3 behind a multiplexed axis.
+inline unsigned motor_count(const DeviceInfo& info) { return info.spm30_multiplexed ? 3 : info.axes; }
 
 // Index ranges grouped for store/restore (0x1010/0x1011 sub-indices 1..4).
 struct ParameterGroup {

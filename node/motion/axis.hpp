@@ -27,7 +27,6 @@ struct AxisConfig {
   bool stall_detection = false;    // STP100 6.3.3 (SPM30: on when the tolerance is set)
   bool indexed_moves = true;       // %Q11 is Move Indexed (STP113, STP100)
   bool limit_started_moves = false;  // STP100 5.3.4: a move toward an active limit waits
-  unsigned multiplexed_axes = 1;     // SPM30 3-axis models: 3 motors behind one register set
 };
 
 // What the axis reports as it happens (status changes go out on the bus at once).
