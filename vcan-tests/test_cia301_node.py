@@ -197,3 +197,23 @@ def test_stepctl_reads_writes_and_fails_clearly(master, start_node):
     assert run("read", str(NODE), "zz").returncode == 2
     r = run("nmt", "start", "--node", str(NODE))
     assert r.returncode == 0 and "confirmed" in r.stdout
+
+
+def test_stepctl_watch_decodes_the_bus(master, start_node):
+    ctl = os.environ.get("STEPCTL_BIN", "build/tools/stepctl")
+    watch = subprocess.Popen([ctl, "--iface", CHANNEL, "watch", "--seconds", "6"], stdout=subprocess.PIPE, text=True)
+    time.sleep(2.5)  # python and the tool start slowly inside User-Mode Linux
+    start_node(NODE)
+    time.sleep(1.0)  # the watch reads the node's PDO mapping once it sees it
+    master.nmt_start(NODE)
+    master.wait_heartbeat(NODE, timeout=1.0, state=STATE_OPERATIONAL)
+    master.write_u32(NODE, 0x1016, 1, (0x7E << 16) | 200)
+    master.send(0x77E, b"\x05")  # a heartbeat from node 126, then silence: EMCY 0x8130
+    assert master.wait_emcy(NODE, timeout=2.0) is not None
+    out, _ = watch.communicate(timeout=30)
+    assert f"heartbeat node {NODE}: boot-up" in out
+    assert f"NMT start node {NODE}" in out
+    assert f"heartbeat node {NODE}: operational" in out
+    assert f"EMCY node {NODE}: 0x8130 life guard or heartbeat error" in out
+    # TPDO1 of axis 1 decoded by the mapping read from the node.
+    assert f"TPDO1 node {NODE}: Axis 1 status bits" in out, out[-3000:]
