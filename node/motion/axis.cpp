@@ -319,12 +319,14 @@ void Axis::on_step(const Step& step) {
   if (job_ == Job::Move) ++move_done_steps_;
 }
 
-void Axis::home_event(Tick now) {
+void Axis::home_event(Tick now, bool at_limit) {
   bool origin = origin_active();
   switch (home_stage_) {
     case HomeStage::Seek:
-      if (config_.limit_qualified_home || !origin) return;
-      generator_.halt(now);  // step 3: stop at once
+      // Step 3: stop at once on the origin, or (limit-switch-qualified, STP100 3.2.3) on
+      // the end limit of the direction of travel.
+      if (config_.limit_qualified_home ? !at_limit : !origin) return;
+      generator_.halt(now);
       break;
     case HomeStage::BackToOrigin:
       if (origin) {
@@ -364,15 +366,13 @@ void Axis::after_step(const Step& step) {
   if (estop_ && *estop_) return latch(status::kEmergencyStop, t);
   if (step.direction < 0 && motor().lower_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
-      generator_.halt(t);
-      return home_event(t);
+      return home_event(t, /*at_limit=*/true);
     }
     return latch(status::kLowerLimit, t);
   }
   if (step.direction > 0 && motor().upper_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
-      generator_.halt(t);
-      return home_event(t);
+      return home_event(t, /*at_limit=*/true);
     }
     return latch(status::kUpperLimit, t);
   }

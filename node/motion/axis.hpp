@@ -85,7 +85,7 @@ class Axis {
   void on_step(const Step& step);
   void after_step(const Step& step);
   void finish(Tick now);
-  void home_event(Tick now);
+  void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);
   void select(unsigned motor, Tick now);
