@@ -12,6 +12,7 @@ namespace {
 constexpr uint32_t kCobInvalid = 0x80000000;  // bit 31: object does not exist / not valid
 constexpr uint32_t kCobGenerate = 0x40000000;  // bit 30: SYNC producer (0x1005), no RTR (TPDO)
 constexpr uint32_t kCobExtended = 0x20000000;  // bit 29: 29-bit ID (not supported)
+constexpr uint32_t kCobIdHighBits = 0x1FFFF800;  // bits 11..28: 0 for an 11-bit CAN-ID
 
 using DT = DataType;
 using AC = Access;
@@ -24,10 +25,11 @@ std::string hex_index(const char* fmt, unsigned n) {
   return buf;
 }
 
-// COB-ID rules shared by SYNC, EMCY and PDOs: no 29-bit IDs, no restricted IDs, and the
-// CAN-ID of an object that is valid may not change (CiA 301 7.5.2.5, 7.5.2.35).
+// COB-ID rules shared by EMCY and PDOs: no 29-bit IDs (bit 29, and bits 11..28 are 0 with
+// an 11-bit CAN-ID), no restricted IDs, and the CAN-ID of an object that is valid may not
+// change (CiA 301 7.3.5, 7.5.2.17, 7.5.2.35, 7.5.2.37).
 SdoAbort check_cob_id(uint32_t current, uint32_t next, uint32_t valid_mask_when_clear) {
-  if (next & kCobExtended) return SdoAbort::InvalidValue;
+  if (next & (kCobExtended | kCobIdHighBits)) return SdoAbort::InvalidValue;
   bool next_valid = valid_mask_when_clear ? !(next & valid_mask_when_clear) : true;
   bool current_valid = valid_mask_when_clear ? !(current & valid_mask_when_clear) : true;
   uint32_t id = next & 0x7FF;
@@ -79,7 +81,10 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
                        encode<uint32_t>(cob::kSync));
   sync.validate = [&od](std::span<const uint8_t> d) {
     uint32_t current = od.get<uint32_t>(0x1005, 0), next = u32(d);
-    if (next & kCobExtended) return SdoAbort::InvalidValue;
+    // CiA 301 7.5.2.5: base frames only (bit 29 and bits 11..28 are 0), the SYNC CAN-ID is
+    // not a restricted one (7.3.5), and it may not change while this device produces SYNC.
+    if (next & (kCobExtended | kCobIdHighBits)) return SdoAbort::InvalidValue;
+    if (is_restricted_can_id(next & 0x7FF)) return SdoAbort::InvalidValue;
     if ((next & 0x7FF) != (current & 0x7FF) && (current & kCobGenerate) && (next & kCobGenerate))
       return SdoAbort::InvalidValue;
     return SdoAbort::None;
@@ -99,6 +104,8 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
                        encode<uint32_t>(cob::kEmcyBase + info.node_id));
   emcy.eds_default = "$NODEID+0x80";
   emcy.validate = [&od](std::span<const uint8_t> d) {
+    // Bit 30 of the EMCY COB-ID is reserved and 0 (CiA 301 7.5.2.17).
+    if (u32(d) & kCobGenerate) return SdoAbort::InvalidValue;
     return check_cob_id(od.get<uint32_t>(0x1014, 0), u32(d), kCobInvalid);
   };
   od.var(0x1015, "Inhibit time EMCY", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
@@ -181,7 +188,9 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
     comm.add(3, "Inhibit time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
   }
   comm.add(5, "Event timer", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
-  if (!rx) comm.add(6, "SYNC start value", DT::Unsigned8, AC::ReadWrite, {0});
+  // SYNC start value: 0 = not used, 1..240 = SYNC counter value; 241..255 are reserved
+  // (CiA 301 7.5.2.37).
+  if (!rx) comm.add(6, "SYNC start value", DT::Unsigned8, AC::ReadWrite, {0}).high = Bytes{240};
 
   auto pdo_valid = [&od, comm_index] { return !(od.get<uint32_t>(comm_index, 1) & kCobInvalid); };
   id.validate = [&od, comm_index](std::span<const uint8_t> d) {

@@ -127,9 +127,10 @@ SdoAbort Dictionary::write(uint16_t index, uint8_t sub, std::span<const uint8_t>
   if (e.validate) {
     if (SdoAbort a = e.validate(data); a != SdoAbort::None) return a;
   }
-  (void)origin;  // same rules for SDO and PDO writes (see WriteOrigin)
   e.value.assign(data.begin(), data.end());
-  if (e.on_written) e.on_written();
+  // A PDO's reactions run once all its values are in (unpack_pdo), so a command bit in the
+  // same PDO as its destination sees the new destination.
+  if (e.on_written && origin != WriteOrigin::Pdo) e.on_written();
   return SdoAbort::None;
 }
 

@@ -18,7 +18,8 @@ namespace stepnode::od {
 enum class ObjectCode : uint8_t { Var = 0x07, Array = 0x08, Record = 0x09 };
 
 // Who is writing: a master over SDO, or a received PDO (its entries were checked when
-// mapped). Both obey the same rules today; hooks may tell them apart.
+// mapped). Same rules; for a PDO the on_written reactions are run by unpack_pdo after the
+// whole PDO is stored.
 enum class WriteOrigin : uint8_t { Sdo, Pdo };
 
 struct Entry {

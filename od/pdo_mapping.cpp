@@ -71,17 +71,25 @@ std::vector<uint8_t> pack_pdo(Dictionary& dictionary, const PdoMapping& mapping)
 
 SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
                     std::span<const uint8_t> data) {
+  // A PDO shorter than its mapping is not processed (CiA 301 7.2.2.2; the node sends EMCY
+  // 0x8210). Refusing here also keeps read_bits inside the buffer.
+  if (data.size() * 8 < mapping_bits(mapping)) return SdoAbort::LengthTooLow;
   size_t offset = 0;
   SdoAbort first = SdoAbort::None;
+  std::vector<Entry*> written;
   for (const auto& m : mapping) {
     if (!m.dummy()) {
       Bytes value = encode<uint64_t>(read_bits(data, offset, m.bits));
       value.resize((m.bits + 7) / 8);
       SdoAbort a = dictionary.write(m.index, m.sub, value, WriteOrigin::Pdo);
+      if (a == SdoAbort::None) written.push_back(dictionary.find(m.index, m.sub));
       if (first == SdoAbort::None) first = a;
     }
     offset += m.bits;
   }
+  // Reactions after the whole PDO is in (a command sees the destination sent with it).
+  for (Entry* e : written)
+    if (e->on_written) e->on_written();
   return first;
 }
 

@@ -39,8 +39,9 @@ inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(ma
 
 // Packs the mapped values into a PDO payload (bit by bit, LSB first).
 std::vector<uint8_t> pack_pdo(Dictionary& dictionary, const PdoMapping& mapping);
-// Writes the values of a received PDO into the dictionary (WriteOrigin::Pdo). The caller
-// has checked the length. Returns the first abort from a write (e.g. out of range), or None.
+// Writes the values of a received PDO into the dictionary (WriteOrigin::Pdo). Data shorter
+// than the mapping writes nothing and gives LengthTooLow; extra bytes are ignored. Returns
+// the first abort from a write (e.g. out of range), or None.
 SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
                     std::span<const uint8_t> data);
 

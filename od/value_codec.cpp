@@ -1,8 +1,11 @@
 #include "od/value_codec.hpp"
 
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -62,8 +65,12 @@ std::string format_value(DataType type, std::span<const uint8_t> bytes, bool hex
     return out;
   }
   if (is_real(type)) {
+    // Shortest text that reads back to the same value in the type's own precision: a
+    // REAL32 0.1 prints "0.1", not the double "0.10000000149011612".
     char buf[64];
-    auto [p, ec] = std::to_chars(buf, buf + sizeof buf, as_real(type, bytes));
+    auto [p, ec] = type == DataType::Real32
+                       ? std::to_chars(buf, buf + sizeof buf, decode<float>(bytes))
+                       : std::to_chars(buf, buf + sizeof buf, as_real(type, bytes));
     return std::string(buf, p);
   }
   if (hex) {
@@ -97,8 +104,16 @@ Bytes parse_value(DataType type, std::string_view text) {
     char* end = nullptr;
     errno = 0;
     double v = std::strtod(s.c_str(), &end);
-    if (*end != '\0' || errno != 0) bad(text, type, "not a number");
-    return type == DataType::Real32 ? encode<float>(static_cast<float>(v)) : encode<double>(v);
+    if (std::isspace(static_cast<unsigned char>(s[0])) || *end != '\0' || errno != 0)
+      bad(text, type, "not a number");
+    if (type == DataType::Real32) {
+      // A finite double beyond the float range has no REAL32 value (and converting it is
+      // undefined behaviour).
+      if (std::isfinite(v) && std::fabs(v) > std::numeric_limits<float>::max())
+        bad(text, type, "out of range");
+      return encode<float>(static_cast<float>(v));
+    }
+    return encode<double>(v);
   }
   bool negative = s[0] == '-';
   std::string digits = negative || s[0] == '+' ? s.substr(1) : s;
@@ -114,6 +129,12 @@ Bytes parse_value(DataType type, std::string_view text) {
   size_t size = fixed_size(type);
   if (is_signed_integer(type)) {
     int bits = static_cast<int>(size * 8);
+    // Hex without a sign is the two's-complement bit pattern of the type ("0xFFFE" is an
+    // INTEGER16 -2), as format_value(hex) prints it and EDS files write signed limits.
+    if (base == 16 && !negative && (size == 8 || magnitude >> bits == 0)) {
+      Bytes all = encode<uint64_t>(magnitude);
+      return Bytes(all.begin(), all.begin() + static_cast<long>(size));
+    }
     uint64_t max_pos = (uint64_t{1} << (bits - 1)) - 1;
     if ((!negative && magnitude > max_pos) || (negative && magnitude > max_pos + 1))
       bad(text, type, "out of range");

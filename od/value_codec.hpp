@@ -1,5 +1,6 @@
 // Little-endian encoding of typed values into object-dictionary byte strings.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <span>
@@ -54,7 +55,8 @@ int compare_values(DataType type, std::span<const uint8_t> a, std::span<const ui
 
 // Human text of a value ("1000", "-5", "0x00000191", "\"stepnode\"", "12 bytes").
 std::string format_value(DataType type, std::span<const uint8_t> bytes, bool hex = false);
-// Parses text into a value of the type: decimal, 0x-hex, float, or a string. Throws
+// Parses text into a value of the type: decimal, 0x-hex, float, or a string. For a signed
+// type, unsigned hex of the type's width is its two's-complement pattern. Throws
 // std::invalid_argument naming the text and the type when it does not fit.
 Bytes parse_value(DataType type, std::string_view text);
 
