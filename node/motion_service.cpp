@@ -13,7 +13,7 @@ MotionService::MotionService(od::Dictionary& dictionary, const od::DeviceInfo& i
     : dictionary_(dictionary), emcy_(emcy), count_(info.axes), motors_(od::motor_count(info)) {
   machine_.axes.resize(motors_);
   for (unsigned a = 0; a < count_; ++a) {
-    std::vector<sim::AxisMachine*> motors{&machine_.axes[a]};
+    std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
     if (info.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
     axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, motors, &machine_.emergency_stop));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) { on_axis_event(a, e); };

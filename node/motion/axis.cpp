@@ -19,7 +19,7 @@ bool is_set(uint16_t bits, uint16_t bit) { return (bits & bit) != 0; }
 
 }  // namespace
 
-Axis::Axis(AxisConfig config, std::vector<sim::AxisMachine*> motors, const bool* estop)
+Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop)
     : config_(config), motors_(std::move(motors)), estop_(estop) {
   if (motors_.empty()) throw std::invalid_argument("an axis needs at least one motor");
   saved_.resize(motors_.size());
@@ -314,7 +314,7 @@ void Axis::check_stall(const Step& step) {
 }
 
 void Axis::on_step(const Step& step) {
-  motor().step(step.direction);
+  motor().step(step.time, step.direction);  // the step sink
   motor_position_ += step.direction;
   if (job_ == Job::Move) ++move_done_steps_;
 }

@@ -8,8 +8,9 @@
 #include <vector>
 
 #include "node/motion/axis_registers.hpp"
+#include "node/motion/motor_port.hpp"
 #include "node/motion/step_generator.hpp"
-#include "node/sim/machine.hpp"
+#include "node/sim/machine.hpp"  // EncoderKind
 
 namespace stepnode::motion {
 
@@ -38,9 +39,9 @@ struct AxisEvent {
 
 class Axis {
  public:
-  // `motors`: one machine axis, or three for an SPM30 multiplexed axis. `estop` is the
-  // e-stop input, shared by the machine.
-  Axis(AxisConfig config, std::vector<sim::AxisMachine*> motors, const bool* estop);
+  // `motors`: where steps go and inputs come from (the simulated machine or hardware): one,
+  // or three for an SPM30 multiplexed axis. `estop` is the e-stop input.
+  Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop);
 
   // Power-up or watchdog reset (also NMT reset node): everything off, %I8 on.
   void power_up(Tick now);
@@ -72,8 +73,8 @@ class Axis {
   enum class Job { None, Jog, Move, Home };
   enum class HomeStage { Seek, BackToOrigin, Clear, Approach };
 
-  sim::AxisMachine& motor() { return *motors_[selected_]; }
-  const sim::AxisMachine& motor() const { return *motors_[selected_]; }
+  MotorPort& motor() { return *motors_[selected_]; }
+  const MotorPort& motor() const { return *motors_[selected_]; }
   bool origin_active() const;
   void execute(uint16_t command_bit, Tick now);
   void latch(uint16_t error_bits, Tick now);
@@ -91,7 +92,7 @@ class Axis {
   void select(unsigned motor, Tick now);
 
   AxisConfig config_;
-  std::vector<sim::AxisMachine*> motors_;
+  std::vector<MotorPort*> motors_;
   const bool* estop_;
   CommandWords words_;
   StepGenerator generator_;

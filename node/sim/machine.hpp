@@ -6,6 +6,8 @@
 #include <optional>
 #include <vector>
 
+#include "node/motion/motor_port.hpp"
+
 namespace stepnode::sim {
 
 // A switch active while the mechanical position is inside [position, position + width).
@@ -32,27 +34,29 @@ struct AxisMachineConfig {
   uint32_t miss_every = 0;               // every n-th step is lost (0 = none)
 };
 
-class AxisMachine {
+class AxisMachine : public motion::MotorPort {
  public:
   explicit AxisMachine(AxisMachineConfig config = {}) : config_(config) {}
 
   // One step pulse from the drive (+1 up, -1 down). The motor follows unless stalled or
   // the pulse is one of the missed ones.
-  void step(int direction);
+  void step(motion::Tick time, int direction) override;
+  void step(int direction) { step(last_step_time_, direction); }
   // External force: the load moved without steps.
   void displace(int64_t steps) { position_ += steps; }
 
   int64_t position() const { return position_; }
-  bool home() const { return config_.home && config_.home->contains(position_); }
-  bool index() const { return config_.index && config_.index->contains(position_); }
-  bool lower_limit() const { return config_.lower_limit && position_ <= *config_.lower_limit; }
-  bool upper_limit() const { return config_.upper_limit && position_ >= *config_.upper_limit; }
-  bool marker() const;
+  bool home() const override { return config_.home && config_.home->contains(position_); }
+  bool index() const override { return config_.index && config_.index->contains(position_); }
+  bool lower_limit() const override { return config_.lower_limit && position_ <= *config_.lower_limit; }
+  bool upper_limit() const override { return config_.upper_limit && position_ >= *config_.upper_limit; }
+  bool marker() const override;
   // Encoder counts: 4 per line for quadrature (x4 decoding), 1 per line for up/down;
   // 0 without an encoder.
-  int64_t encoder_count() const;
+  int64_t encoder_count() const override;
   int64_t encoder_counts_per_rev() const;
   uint64_t pulses_received() const { return pulses_; }
+  motion::Tick last_step_time() const { return last_step_time_; }
 
   AxisMachineConfig& config() { return config_; }
   const AxisMachineConfig& config() const { return config_; }
@@ -61,6 +65,7 @@ class AxisMachine {
   AxisMachineConfig config_;
   int64_t position_ = 0;
   uint64_t pulses_ = 0;
+  motion::Tick last_step_time_ = 0;
 };
 
 // The whole machine: the axes and the inputs they share.

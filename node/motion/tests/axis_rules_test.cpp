@@ -13,7 +13,7 @@ class AxisRules : public ::testing::Test {
   void SetUp() override { build({}); }
   void build(AxisConfig config, sim::AxisMachineConfig machine = default_machine()) {
     motors.assign(3, sim::AxisMachine(machine));
-    std::vector<sim::AxisMachine*> ptrs{&motors[0]};
+    std::vector<MotorPort*> ptrs{&motors[0]};
     if (config_multiplexed) ptrs = {&motors[0], &motors[1], &motors[2]};
     axis = std::make_unique<Axis>(config, ptrs, &estop);
     now = 0;
