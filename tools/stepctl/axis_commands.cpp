@@ -1,6 +1,8 @@
 #include "tools/stepctl/axis_commands.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <optional>
 #include <cstdio>
 #include <stdexcept>
 #include <thread>
@@ -44,15 +46,23 @@ struct AxisAccess {
 
 const char* kPhase[] = {"stopped", "accelerating", "running", "decelerating", "base velocity"};
 
-void progress(AxisAccess& a, bool quiet) {
-  // Live line while the axis moves: position, velocity, phase.
+// Live line while the axis moves: a bar toward the target (moves), position, velocity, phase.
+void progress(AxisAccess& a, bool quiet, std::optional<std::pair<int64_t, int64_t>> from_to = std::nullopt) {
   for (;;) {
     uint16_t s = a.status();
     int32_t pos = od::decode<int32_t>(a.read(kMotorPosition));
     int32_t vel = od::decode<int32_t>(a.read(kVelocity));
     uint8_t phase = a.read(kMotionPhase).at(0);
     if (!quiet) {
-      std::printf("\r  position %10d   velocity %8d steps/s   %-14s", pos, vel, phase < 5 ? kPhase[phase] : "?");
+      std::string bar;
+      if (from_to && from_to->first != from_to->second) {
+        double done = static_cast<double>(pos - from_to->first) / static_cast<double>(from_to->second - from_to->first);
+        int filled = static_cast<int>(std::clamp(done, 0.0, 1.0) * 30 + 0.5);
+        bar = "[" + std::string(filled, '#') + std::string(30 - filled, '-') + "] " +
+              std::to_string(static_cast<int>(std::clamp(done, 0.0, 1.0) * 100)) + "%";
+      }
+      std::printf("\r  %s position %10d   velocity %8d steps/s   %-14s", bar.c_str(), pos, vel,
+                  phase < 5 ? kPhase[phase] : "?");
       std::fflush(stdout);
     }
     if (!(s & 0x8000)) break;  // %I16 moving
@@ -144,9 +154,10 @@ int run_axis_command(MasterBus& bus, int node, int axis, const std::vector<std::
     }
     if (target < -8'388'608 || target > 8'388'607)
       throw std::invalid_argument("move: " + w[2] + " is outside -8388608..8388607 (the module's range)");
+    int64_t start = od::decode<int32_t>(a.read(kMotorPosition));
     a.write(kDestination, od::encode<int32_t>(static_cast<int32_t>(target)));
     a.pulse(w[1] == "abs" ? 1u << 8 : 1u << 7);  // %Q9 / %Q8
-    progress(a, quiet);
+    progress(a, quiet, std::make_pair(start, w[1] == "abs" ? target : start + target));
     return report(a);
   }
   throw std::invalid_argument("unknown axis command '" + verb + "' (clear, home, move, jog, stop, estop, status)");
