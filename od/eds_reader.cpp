@@ -58,7 +58,7 @@ struct Lines {
 
 const std::string& key(const std::map<std::string, std::string>& section, const char* name,
                        const std::string& where, const Lines& lines) {
-  auto it = section.find(name);
+  auto it = section.find(lower(name));
   if (it == section.end()) fail(lines.section.at(where), "[" + where + "] has no " + name);
   return it->second;
 }
@@ -130,7 +130,7 @@ EdsFile parse_eds(std::string_view text) {
     EdsEntry e;
     e.index = index;
     e.sub = static_cast<uint8_t>(sub < 0 ? 0 : sub);
-    e.name = key(values, "parametername", name, lines);
+    e.name = key(values, "ParameterName", name, lines);
     if (sub >= 0) {
       auto parent = eds.sections.find(name.substr(0, 4));
       if (parent != eds.sections.end() && parent->second.count("parametername"))
@@ -139,7 +139,7 @@ EdsFile parse_eds(std::string_view text) {
     unsigned long type = number(type_it->second, lines.of(name, "datatype"), "[" + name + "] DataType");
     if (type > 0xFFFF) fail(lines.of(name, "datatype"), "[" + name + "] DataType is not 16-bit");
     e.type = static_cast<DataType>(type);
-    e.access = parse_access(key(values, "accesstype", name, lines), lines.of(name, "accesstype"),
+    e.access = parse_access(key(values, "AccessType", name, lines), lines.of(name, "accesstype"),
                             "[" + name + "]");
     auto pdo = values.find("pdomapping");
     if (pdo != values.end())
