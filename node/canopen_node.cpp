@@ -31,7 +31,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                         },
                     .recovered =
                         [this](uint8_t node, uint64_t now) {
-                          spdlog::info("heartbeat of node {} is back", node);
+                          spdlog::info("heartbeat of node {} is back (or no longer watched)", node);
                           if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
                         },
                     .remote_reset = nullptr}),
@@ -58,14 +58,16 @@ void CanopenNode::install_service_hooks() {
     save.validate = [this, check = save.validate, group](std::span<const uint8_t> d) {
       if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
       spdlog::info("saving {} to {}", group.name, store_.file().string());
-      return store_.save(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::DataTransfer;
+      // A wrong signature is 0x08000020 (checked above); "if the storing failed" the answer
+      // is 0x06060000, access failed due to a hardware error (CiA 301 7.5.2.13).
+      return store_.save(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::Hardware;
     };
     od::Entry& restore = od.at(0x1011, group.sub);
     restore.validate = [this, check = restore.validate, group](std::span<const uint8_t> d) {
       if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
       spdlog::info("restoring defaults of {} (after the next reset)", group.name);
-      return store_.forget(group.first, group.last) ? od::SdoAbort::None
-                                                     : od::SdoAbort::DataTransfer;
+      // "If the restoring failed": 0x06060000, as for storing (CiA 301 7.5.2.14).
+      return store_.forget(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::Hardware;
     };
   }
   for (auto& [index, obj] : od.objects()) {
@@ -73,7 +75,10 @@ void CanopenNode::install_service_hooks() {
     if (index >= 0x1400 && index <= 0x1BFF)
       for (auto& [sub, e] : od.object(index)->entries) e.on_written = [this] { pdo_.mark_dirty(); };
   }
-  for (auto& [sub, e] : od.object(0x1016)->entries) e.on_written = [this] { consumer_.reset(); };
+  // Writing one consumer entry must not reset the others: a lost node's EMCY 0x8130 would
+  // stay active for ever, as its slot no longer knew it had timed out.
+  for (auto& [sub, e] : od.object(0x1016)->entries)
+    e.on_written = [this] { consumer_.reconfigure(); };
   for (uint16_t index : {0x1005, 0x1006, 0x1019})
     od.at(index, 0).on_written = [this] { sync_.reset(0); };
   // 0x1021: the device's own EDS, generated from this dictionary when read.
@@ -88,7 +93,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   // Reset application: every parameter back to its stored value (or default); reset
   // communication: only 0x1000-0x1FFF (CiA 301 7.3.2.2.1).
   state_ = NmtState::Initialising;
-  pdo_.stop();
+  pdo_.reset();
   sdo_.reset();
   if (reset_application) {
     store_.load_into_dictionary(0x1000, 0x9FFF);
@@ -113,6 +118,9 @@ void CanopenNode::enter(NmtState next, uint64_t now_us) {
   if (next == NmtState::Operational && previous != NmtState::Operational) pdo_.start(now_us);
   if (next != NmtState::Operational) pdo_.stop();
   if (!sdo_allowed(next)) sdo_.reset();
+  // The SYNC counter restarts at 1 when the device leaves stopped (CiA 301 7.2.5, SYNC
+  // counter); the producer was silent there, so its period restarts from now as well.
+  if (previous == NmtState::Stopped && next != NmtState::Stopped) sync_.reset(now_us);
   if (previous != next) {
     spdlog::info("NMT: {} -> {}", state_name(previous), state_name(next));
     // Confirm the new state at once; the period restarts from here.

@@ -36,6 +36,18 @@ void HeartbeatConsumer::load() {
 
 void HeartbeatConsumer::reset() { load(); }
 
+void HeartbeatConsumer::reconfigure() {
+  for (unsigned i = 0; i < slots_.size(); ++i) {
+    uint32_t v = dictionary_.get<uint32_t>(0x1016, static_cast<uint8_t>(i + 1));
+    Slot next{static_cast<uint8_t>((v >> 16) & 0xFF), static_cast<uint16_t>(v & 0xFFFF)};
+    Slot& s = slots_[i];
+    if (next.node == s.node && next.time_ms == s.time_ms) continue;
+    Slot old = s;
+    s = next;
+    if (old.timed_out && events_.recovered) events_.recovered(old.node, now_us_);
+  }
+}
+
 bool HeartbeatConsumer::timed_out(uint8_t node) const {
   for (const auto& s : slots_)
     if (s.node == node && s.timed_out) return true;
@@ -49,6 +61,7 @@ bool HeartbeatConsumer::any_timed_out() const {
 }
 
 void HeartbeatConsumer::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+  now_us_ = now_us;
   if (frame.rtr || frame.dlc != 1 || frame.id <= od::cob::kHeartbeat ||
       frame.id > od::cob::kHeartbeat + 127)
     return;
@@ -68,6 +81,7 @@ void HeartbeatConsumer::on_frame(const od::CanFrame& frame, uint64_t now_us) {
 }
 
 void HeartbeatConsumer::on_tick(uint64_t now_us) {
+  now_us_ = now_us;
   for (auto& s : slots_) {
     if (!s.started || s.timed_out || s.time_ms == 0 || s.node == 0) continue;
     if (now_us - s.last_us > uint64_t{s.time_ms} * 1000) {

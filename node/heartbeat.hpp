@@ -41,8 +41,12 @@ class HeartbeatConsumer {
   // Feeds a frame from the bus (anything not a heartbeat is ignored).
   void on_frame(const od::CanFrame& frame, uint64_t now_us);
   void on_tick(uint64_t now_us);
-  // Forget all monitoring state (reset communication, or 0x1016 changed).
+  // Forget all monitoring state (reset communication).
   void reset();
+  // 0x1016 was written: entries whose node and time are unchanged go on being monitored
+  // as before; a changed entry starts afresh, and if it was timed out that loss is over
+  // (`recovered` is called, so the error does not stay active with nothing to clear it).
+  void reconfigure();
   bool timed_out(uint8_t node) const;
   bool any_timed_out() const;
 
@@ -59,6 +63,7 @@ class HeartbeatConsumer {
   od::Dictionary& dictionary_;
   Events events_;
   std::array<Slot, od::kHeartbeatConsumers> slots_{};
+  uint64_t now_us_ = 0;  // the latest time seen in on_frame/on_tick
 };
 
 }  // namespace stepnode::node

@@ -20,7 +20,7 @@ od::PdoMapping read_mapping(od::Dictionary& od, uint16_t index) {
 PdoEngine::PdoEngine(od::Dictionary& dictionary, unsigned pdo_count, Send send, EmcyProducer& emcy)
     : dictionary_(dictionary), count_(pdo_count), send_(std::move(send)), emcy_(emcy) {}
 
-void PdoEngine::reload() {
+void PdoEngine::reload(uint64_t now_us) {
   dirty_ = false;
   rpdos_.resize(count_);
   tpdos_.resize(count_);
@@ -35,7 +35,10 @@ void PdoEngine::reload() {
     r.cob_id = rid & 0x7FF;
     r.type = dictionary_.get<uint8_t>(rc, 2);
     r.event_ms = dictionary_.get<uint16_t>(rc, 5);
-    if (!r.valid) r.sync_pending = r.monitoring = r.timed_out = false;
+    if (!r.valid) {
+      r.sync_pending = r.monitoring = false;
+      end_timeout(r, now_us);
+    }
 
     Tpdo& t = tpdos_[n];
     uint16_t tc = static_cast<uint16_t>(0x1800 + n);
@@ -75,14 +78,17 @@ void PdoEngine::reload() {
 }
 
 void PdoEngine::start(uint64_t now_us) {
-  if (dirty_) reload();
+  if (dirty_) reload(now_us);
   running_ = true;
   for (auto& t : tpdos_) {
     t.send_request = t.event_pending = true;
     t.sync_count = 0;
     t.waiting_sync_start = t.sync_start != 0;
   }
-  for (auto& r : rpdos_) r.monitoring = r.timed_out = r.sync_pending = false;
+  // Deadline monitoring restarts with the next reception. A timeout seen before leaving
+  // operational stays active until then (clearing the flag alone left EMCY 0x8250 and
+  // 0x1001 bit 4 set for ever).
+  for (auto& r : rpdos_) r.monitoring = r.sync_pending = false;
   on_tick(now_us);
 }
 
@@ -91,13 +97,28 @@ void PdoEngine::stop() {
   for (auto& r : rpdos_) r.sync_pending = r.monitoring = false;
 }
 
+void PdoEngine::reset() {
+  stop();
+  for (auto& r : rpdos_) r.timed_out = false;
+}
+
 void PdoEngine::apply(Rpdo& pdo, std::span<const uint8_t> data) {
   if (od::unpack_pdo(dictionary_, pdo.mapping, data) != od::SdoAbort::None)
     ++stats_.rpdo_write_errors;
 }
 
+void PdoEngine::end_timeout(Rpdo& pdo, uint64_t now_us) {
+  if (!pdo.timed_out) return;
+  pdo.timed_out = false;
+  // One EMCY condition covers every late RPDO: it ends with the last of them (CiA 301
+  // 7.2.7: the error reset tells that the condition is gone).
+  for (const auto& r : rpdos_)
+    if (r.timed_out) return;
+  emcy_.clear(emcy_code::kRpdoTimeout, now_us);
+}
+
 bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us) {
-  if (dirty_) reload();
+  if (dirty_) reload(now_us);
   if (frame.rtr) return false;
   bool consumed = false;
   for (auto& r : rpdos_) {
@@ -121,10 +142,7 @@ bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us) {
     }
     r.last_rx_us = now_us;
     r.monitoring = true;
-    if (r.timed_out) {
-      r.timed_out = false;
-      emcy_.clear(emcy_code::kRpdoTimeout, now_us);
-    }
+    end_timeout(r, now_us);
     std::span<const uint8_t> data(frame.data.data(), r.bytes);
     if (r.type <= 240) {  // synchronous: applied at the next SYNC
       r.sync_data.assign(data.begin(), data.end());
@@ -148,7 +166,7 @@ void PdoEngine::transmit(Tpdo& t, std::vector<uint8_t> data, uint64_t now_us) {
 }
 
 void PdoEngine::on_sync(uint8_t counter, uint64_t now_us) {
-  if (dirty_) reload();
+  if (dirty_) reload(now_us);
   if (!running_) return;
   for (auto& r : rpdos_) {
     if (r.valid && r.sync_pending) {
@@ -158,12 +176,15 @@ void PdoEngine::on_sync(uint8_t counter, uint64_t now_us) {
   }
   for (auto& t : tpdos_) {
     if (!t.valid || t.type > 240) continue;
-    if (t.waiting_sync_start) {
+    if (t.waiting_sync_start && counter != 0) {
       // With a SYNC counter, the first transmission waits for the start value (7.5.2.35).
-      if (counter == 0 || counter != t.sync_start) continue;
+      if (counter != t.sync_start) continue;
       t.waiting_sync_start = false;
       t.sync_count = t.type;  // transmit on this SYNC
     } else {
+      // A SYNC without a counter (0x1019 = 0): the start value is ignored (CiA 301, TPDO
+      // communication parameter sub-index 06h); waiting for it kept the TPDO silent.
+      t.waiting_sync_start = false;
       ++t.sync_count;
     }
     std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
@@ -179,7 +200,7 @@ void PdoEngine::on_sync(uint8_t counter, uint64_t now_us) {
 }
 
 void PdoEngine::on_tick(uint64_t now_us) {
-  if (dirty_) reload();
+  if (dirty_) reload(now_us);
   if (!running_) return;
   for (auto& r : rpdos_) {
     // Deadline monitoring of received PDOs (event timer, CiA 301 7.5.2.35).

@@ -30,6 +30,8 @@ class PdoEngine {
   void start(uint64_t now_us);
   // Leaving operational: forget pending data and timers.
   void stop();
+  // NMT reset (the EMCY producer forgets its errors too): stop, and forget RPDO timeouts.
+  void reset();
 
   struct Stats {
     uint64_t rpdo_received = 0, rpdo_length_errors = 0, rpdo_write_errors = 0;
@@ -68,7 +70,9 @@ class PdoEngine {
     unsigned sync_count = 0;
   };
 
-  void reload();
+  void reload(uint64_t now_us);
+  // An RPDO is no longer late (received, destroyed): EMCY 0x8250 ends when none is late.
+  void end_timeout(Rpdo& pdo, uint64_t now_us);
   void transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us);
   void apply(Rpdo& pdo, std::span<const uint8_t> data);
 
