@@ -130,6 +130,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     move_target_steps_ = std::llabs(distance);
     move_done_steps_ = 0;
   }
+  index_was_active_ = motor().index();  // an index already on was received before the window
   if (distance == 0) {
     job_ = Job::None;
     notify(AxisEvent::MoveDone);
@@ -186,11 +187,19 @@ void Axis::execute(uint16_t bit, Tick now) {
         resumable_ = true;  // nothing moved yet: the whole move can be resumed
       } else if (moving) {
         generator_.stop(now);
+        // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
+        // it must not go on to steps 4-7 when the origin passes during the ramp down.
+        if (job_ == Job::Home) job_ = Job::None;
       }
       break;
     case command::kSetPosition:
+      // SPM30 3.4 / 3.4.1: DESTINATION POSITION is -8,388,608..+8,388,607; outside it the
+      // command is not possible (Illegal Move) rather than a position the module cannot hold.
+      if (words_.destination < kPositionMin || words_.destination > kPositionMax)
+        return latch(status::kIllegalMove, now);
       motor_position_ = words_.destination;
-      encoder_offset_ += words_.destination - encoder_position();
+      // SPM30 4 SET CURRENT POSITION: "(and into ENCODER POSITION if axis 1 is selected)".
+      if (selected_ == 0) encoder_offset_ += words_.destination - encoder_position();
       position_valid_ = true;
       break;
     case command::kSelectAxis1: select(0, now); break;
@@ -198,6 +207,10 @@ void Axis::execute(uint16_t bit, Tick now) {
     case command::kSelectAxis3: select(2, now); break;
     case command::kFindHomeUp:
     case command::kFindHomeDown: {
+      // SPM30 3.4.1: the destination is loaded into MOTOR POSITION at the end; one the module
+      // cannot hold makes the command impossible (Illegal Move), checked before any motion.
+      if (words_.destination < kPositionMin || words_.destination > kPositionMax)
+        return latch(status::kIllegalMove, now);
       auto ramp = ramp_from_words(now);
       if (!ramp) return;
       position_valid_ = false;  // FIND HOME step 1
@@ -207,6 +220,17 @@ void Axis::execute(uint16_t bit, Tick now) {
       origin_inactive_since_.reset();
       int direction = bit == command::kFindHomeUp ? +1 : -1;
       if (estop_ && *estop_) return latch(status::kEmergencyStop, now);
+      // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
+      // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
+      // the limit is already reached and the search goes on from step 4.
+      if (direction > 0 ? motor().upper_limit() : motor().lower_limit()) {
+        if (!config_.limit_qualified_home)
+          return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+        job_direction_ = direction;
+        dir_high_ = direction > 0;
+        home_event(now, /*at_limit=*/true);
+        break;
+      }
       start_motion(*ramp, direction, std::nullopt, now);
       break;
     }
@@ -232,6 +256,17 @@ void Axis::execute(uint16_t bit, Tick now) {
       if (bit == command::kMoveAbsolute && !position_valid_) return latch(status::kIllegalMove, now);
       auto ramp = ramp_from_words(now);
       if (!ramp) return;
+      if (bit == command::kMoveIndexed) {
+        // SPM30 3.4 / STP100 4.2.3: the words may be changed for the next command as soon as
+        // this one started, so the index words (and the alternate deceleration, %AQ10) are
+        // taken now, not when the index comes.
+        auto index_ramp = ramp_from_words(now, /*index_decel=*/true);
+        if (!index_ramp) return;
+        index_ramp_ = *index_ramp;
+        index_destination_ = words_.index_destination;
+        index_window_open_ = words_.index_window_open;
+        index_window_close_ = words_.index_window_close;
+      }
       int64_t distance = bit == command::kMoveAbsolute
                              ? int64_t{words_.destination} - motor_position_
                              : int64_t{words_.destination};
@@ -287,6 +322,7 @@ void Axis::master_lost(Tick now) {
   // A lost master must never leave a motor running: ramp down, and latch %I8 so nothing
   // moves again until the master is back and clears it.
   if (generator_.moving()) generator_.stop(now);
+  if (job_ == Job::Home) job_ = Job::None;  // ramp down and stop: the search does not go on
   waiting_for_limit_release_ = false;
   resumable_ = false;
   errors_ |= status::kPowerUp;
@@ -345,17 +381,20 @@ void Axis::home_event(Tick now, bool at_limit) {
   }
   // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach.
   if (home_stage_ == HomeStage::Seek && config_.home_method == AxisConfig::HomeMethod::Normal) {
-    // Step 4: back at base velocity in case we shot past; if already on the origin,
-    // step 5 starts at once.
-    home_stage_ = origin ? HomeStage::Clear : HomeStage::BackToOrigin;
+    // Step 4: back at base velocity till the origin is active again. Whether it still is
+    // active is decided as each step of that run is due (advance_to), not here at the stop:
+    // a load that coasted past the origin ("just in case we shot right past home", SPM30 4
+    // FIND HOME step 4) must come back to it; one still on it goes straight on to step 5.
+    home_stage_ = HomeStage::BackToOrigin;
     origin_inactive_since_.reset();
     start_base_run(-job_direction_, now);
     job_direction_ = generator_.direction();
     return;
   }
-  // Step 8: the destination becomes motor (and encoder) position.
+  // Step 8: the destination becomes motor position, and encoder position "if axis 1 is
+  // selected" (SPM30 4 FIND HOME step 7).
   motor_position_ = words_.destination;
-  encoder_offset_ += words_.destination - encoder_position();
+  if (selected_ == 0) encoder_offset_ += words_.destination - encoder_position();
   position_valid_ = true;
   job_ = Job::None;
   notify(AxisEvent::MoveDone);
@@ -382,16 +421,22 @@ void Axis::after_step(const Step& step) {
   if (job_ == Job::Home) return home_event(t);
   if (job_ == Job::Move && move_indexed_ && !index_taken_) {
     // STP113 C1.3.4 / STP100 5.3.5: the index input counts only inside the window, which
-    // opens at the running velocity and closes at the deceleration point.
-    bool window = generator_.phase() == MotionPhase::Running &&
-                  move_done_steps_ >= int64_t{words_.index_window_open} &&
-                  move_done_steps_ < int64_t{words_.index_window_close};
-    if (window && motor().index()) {
+    // opens at the running velocity and closes at the deceleration point. "The motor must
+    // attain Running Velocity": the engine may also cruise below it (a short move capped at
+    // STPCALC's peak), which does not open the window. The index counts when it "becomes
+    // active" there: one already on when the window opened was "received before" it.
+    bool index = motor().index();
+    bool became_active = index && !index_was_active_;
+    index_was_active_ = index;
+    bool window = generator_.phase() == MotionPhase::Running && generator_.level() >= move_ramp_.run_level &&
+                  move_done_steps_ >= int64_t{index_window_open_} &&
+                  move_done_steps_ < int64_t{index_window_close_};
+    if (window && became_active) {
       index_taken_ = true;
       RampSpec alternate = move_ramp_;
-      if (auto r = ramp_from_words(t, true)) alternate.decel_ticks_per_level = r->decel_ticks_per_level;
-      generator_.retarget(t, words_.index_destination, alternate);
-      move_target_steps_ = move_done_steps_ + words_.index_destination;
+      alternate.decel_ticks_per_level = index_ramp_.decel_ticks_per_level;
+      generator_.retarget(t, index_destination_, alternate);
+      move_target_steps_ = move_done_steps_ + index_destination_;
     }
   }
 }
@@ -417,6 +462,13 @@ void Axis::finish(Tick now) {
 
 void Axis::advance_to(Tick now) {
   for (;;) {
+    // SPM30 3.3.1 / STP100 4.2.1: the e-stop input stops motion at once. It is not a function
+    // of the position, so it is looked at before every step (and while a limit-started move
+    // waits): no step goes out once it is active, and %I1 shows as soon as the axis is told.
+    if (estop_ && *estop_ && (generator_.moving() || waiting_for_limit_release_)) {
+      latch(status::kEmergencyStop, now);
+      continue;
+    }
     if (waiting_for_limit_release_) {
       bool still = job_direction_ > 0 ? motor().upper_limit() : motor().lower_limit();
       if (still) break;
@@ -452,11 +504,20 @@ void Axis::advance_to(Tick now) {
       }
       break;
     }
+    // FIND HOME step 4 ends when the origin is active again; that includes before the first
+    // step back (still on it after the stop) and after the load was moved by hand.
+    if (job_ == Job::Home && home_stage_ == HomeStage::BackToOrigin && origin_active()) {
+      home_stage_ = HomeStage::Clear;
+      origin_inactive_since_.reset();
+    }
     Step step;
     generator_.next(step);
     on_step(step);
     after_step(step);
   }
+  // STP100 6.3.2: motor and encoder positions are compared continuously, so an external force
+  // on a standing motor (SPM30 5.4 item 6) turns %I9 off too, not only a step.
+  check_position_valid();
   notify(AxisEvent::StatusChanged);
 }
 

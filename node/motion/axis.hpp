@@ -114,6 +114,12 @@ class Axis {
   int64_t move_done_steps_ = 0;
   RampSpec move_ramp_;
   bool move_indexed_ = false, move_repeatable_ = false, index_taken_ = false;
+  // The indexed move's own words, taken with the command (SPM30 3.4: the words may change for
+  // the next move once a command started), and the index input's level after the last step
+  // (an index counts when it becomes active inside the window, C1.3.4 / STP100 5.3.5).
+  uint32_t index_destination_ = 0, index_window_open_ = 0, index_window_close_ = 0;
+  RampSpec index_ramp_;
+  bool index_was_active_ = false;
   bool waiting_for_limit_release_ = false;
   int64_t repeat_distance_ = 0;
   HomeStage home_stage_ = HomeStage::Seek;
