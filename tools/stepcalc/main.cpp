@@ -1,69 +1,81 @@
-// stepcalc: STPCALC (SPM30 Appendix B) beside the engine's exact values for the same move.
+// stepcalc: the Horner STPCALC calculator (SPM30 Appendix B) with the engine's exact values
+// for the same move beside every figure.
 //   stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--plot FILE.svg|FILE.png]
+// TOTAL is 0..16777215 or '-' (a move without destination). Bad input: exit 2, one line.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
 
+#include "tools/stepcalc/arguments.hpp"
+#include "tools/stepcalc/png_export.hpp"
 #include "tools/stepcalc/profile_report.hpp"
+#include "tools/stepcalc/svg_plot.hpp"
 
 using namespace stepnode;
 
+namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"stepcalc: the Horner STPCALC profile calculator, and the engine's exact values beside it"};
+  CLI::App app{
+      "stepcalc: the Horner STPCALC profile calculator (SPM30 Appendix B), with the pulse\n"
+      "engine's exact values for the same move beside STPCALC's."};
   std::string total;
-  std::vector<long long> aq;
+  std::vector<std::string> aq;
   bool json = false;
   std::string plot;
-  app.add_option("TOTAL", total, "total pulses 0..16777215, or - for a move without destination")->required();
-  app.add_option("AQ", aq, "AQ3 velocity resolution, AQ4 base, AQ5 running, AQ6 accel ms, AQ7 decel ms")
-      ->required()->expected(5);
-  app.add_flag("--json", json, "one JSON object: STPCALC's values and an 'engine' object");
-  app.add_option("--plot", plot, "draw velocity against time for both (.svg, or .png with rsvg-convert)");
+  app.add_option("TOTAL", total, "total pulses 0..16777215, or - for a move without destination (jog)")->required();
+  app.add_option("AQ3_AQ7", aq,
+                 "velocity resolution AQ3 (20..65535), base velocity AQ4 (1..8190), running velocity AQ5\n"
+                 "(AQ4+1..8191), acceleration ms AQ6 and deceleration ms AQ7 (1..(AQ5-AQ4)/0.3, at most 27300;\n"
+                 "AQ7 0 = AQ6)")
+      ->required()
+      ->expected(5);
+  app.add_flag("--json", json, "print one JSON object: STPCALC's values and an \"engine\" object with the same keys");
+  app.add_option("--plot", plot,
+                 "draw velocity against time, STPCALC's and the engine's: FILE.svg, or FILE.png (rsvg-convert)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "stepcalc: %s\n", e.what());
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::fprintf(stderr, "stepcalc: %s (usage: stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--plot FILE])\n", e.what());
     return 2;
   }
-  motion::StpcalcInput in;
-  try {
-    if (total != "-") {
-      size_t used = 0;
-      long long t = std::stoll(total, &used);
-      if (used != total.size()) throw std::invalid_argument(total);
-      in.total = t;
-    }
-  } catch (const std::exception&) {
-    std::fprintf(stderr, "stepcalc: total pulses '%s' is not a number (0..16777215, or -)\n", total.c_str());
+  if (!plot.empty() && !ends_with(plot, ".svg") && !ends_with(plot, ".png")) {
+    std::fprintf(stderr, "stepcalc: --plot '%s' must name a .svg or .png file\n", plot.c_str());
     return 2;
   }
-  in.aq3 = aq[0], in.aq4 = aq[1], in.aq5 = aq[2], in.aq6 = aq[3], in.aq7 = aq[4];
   tools::ProfileReport report;
   try {
-    report = tools::make_report(in);
+    report = tools::make_report(tools::parse_input(total, aq));
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "stepcalc: %s\n", e.what());
     return 2;
   }
   std::cout << (json ? tools::report_json(report) : tools::report_text(report));
-  if (!plot.empty()) {
-    bool png = plot.size() > 4 && plot.substr(plot.size() - 4) == ".png";
-    std::string svg_path = png ? plot + ".svg" : plot;
-    std::ofstream(svg_path) << tools::report_svg(report);
-    if (png) {
-      std::string cmd = "rsvg-convert -o '" + plot + "' '" + svg_path + "'";
-      int rc = std::system(cmd.c_str());
-      std::remove(svg_path.c_str());
-      if (rc != 0) {
-        std::fprintf(stderr, "stepcalc: PNG needs rsvg-convert (Debian librsvg2-bin; tools/setup installs it)\n");
-        return 1;
-      }
+  if (plot.empty()) return 0;
+  std::string svg = tools::render_svg(report);
+  try {
+    if (ends_with(plot, ".png")) {
+      tools::write_png(svg, plot);
+    } else {
+      std::ofstream out(plot, std::ios::binary);
+      out << svg;
+      out.close();
+      if (!out) throw std::runtime_error("cannot write " + plot);
     }
-    if (!json) std::cout << "plot written to " << plot << "\n";
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "stepcalc: %s\n", e.what());
+    return 1;
   }
+  if (!json) std::cout << "plot written to " << plot << "\n";
   return 0;
 }

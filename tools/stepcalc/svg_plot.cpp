@@ -1,84 +1,145 @@
-// Velocity against time as a small hand-written SVG: axes, ticks, labels, both curves.
+#include "tools/stepcalc/svg_plot.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 
-#include "tools/stepcalc/profile_report.hpp"
-
 namespace stepnode::tools {
 namespace {
 
-double nice_step(double range) {
-  double raw = range / 6;
+constexpr double kWidth = 960, kHeight = 540;
+constexpr double kLeft = 95, kRight = 30, kTop = 72, kBottom = 58;  // plot area margins
+
+// A 1-2-5 step giving about `ticks` intervals over [0, range].
+double nice_step(double range, int ticks) {
+  double raw = range / ticks;
   double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
+  for (double m : {1.0, 2.0, 5.0})
     if (raw <= m * p) return m * p;
   return 10 * p;
 }
 
+std::string number(double v) {
+  char buf[32];
+  if (std::fabs(v) >= 1 || v == 0)
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  else
+    std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+struct Frame {
+  double tmax, vmax;
+  double x(double t) const { return kLeft + t / tmax * (kWidth - kLeft - kRight); }
+  double y(double v) const { return kHeight - kBottom - v / vmax * (kHeight - kTop - kBottom); }
+};
+
+// Screen points of a curve, dropping corners within half a pixel of the last kept one, then
+// thinning evenly if still more than kMaxPlotPoints; the first and last points always stay.
+std::vector<std::pair<double, double>> screen_points(const Curve& c, const Frame& f) {
+  std::vector<std::pair<double, double>> pts;
+  for (size_t i = 0; i < c.size(); ++i) {
+    double px = f.x(c[i].first), py = f.y(c[i].second);
+    bool last = i + 1 == c.size();
+    bool near = !pts.empty() && std::fabs(px - pts.back().first) < 0.5 && std::fabs(py - pts.back().second) < 0.5;
+    if (near && !last) continue;
+    pts.emplace_back(px, py);
+  }
+  if (pts.size() > kMaxPlotPoints) {
+    std::vector<std::pair<double, double>> thin;
+    double stride = static_cast<double>(pts.size() - 1) / static_cast<double>(kMaxPlotPoints - 1);
+    for (size_t k = 0; k < kMaxPlotPoints; ++k)
+      thin.push_back(pts[std::min(pts.size() - 1, static_cast<size_t>(std::llround(k * stride)))]);
+    pts.swap(thin);
+  }
+  return pts;
+}
+
 }  // namespace
 
-std::string report_svg(const ProfileReport& r) {
-  const double W = 900, H = 500, L = 90, R = 30, T = 50, B = 60;
-  double tmax = 0, vmax = 0;
-  for (const auto* c : {&r.ideal_curve, &r.engine_curve})
-    for (auto [t, v] : *c) tmax = std::max(tmax, t), vmax = std::max(vmax, v);
-  tmax = std::max(tmax, 1e-3);
-  vmax = std::max(vmax * 1.1, 1e-3);
-  auto x = [&](double t) { return L + t / tmax * (W - L - R); };
-  auto y = [&](double v) { return H - B - v / vmax * (H - T - B); };
+std::string render_svg(const ProfileReport& r) {
+  Frame f{0, 0};
+  for (const Curve* c : {&r.ideal_curve, &r.engine_curve})
+    for (auto [t, v] : *c) f.tmax = std::max(f.tmax, t), f.vmax = std::max(f.vmax, v);
+  f.tmax = f.tmax > 0 ? f.tmax * 1.02 : 1.0;
+  f.vmax = f.vmax > 0 ? f.vmax * 1.08 : 1.0;
+  const double x0 = kLeft, x1 = kWidth - kRight, y0 = kHeight - kBottom, y1 = kTop;
+
   std::string s;
   char buf[1024];
-  std::snprintf(buf, sizeof buf,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" font-family=\"sans-serif\" "
-                "font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n", W, H);
-  s += buf;
-  std::snprintf(buf, sizeof buf, "<text x=\"%.0f\" y=\"25\" font-size=\"15\">Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld</text>\n",
-                L, r.input.total ? std::to_string(*r.input.total).c_str() : "-", static_cast<long long>(r.input.aq3),
-                static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5),
-                static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7));
-  s += buf;
-  std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n", L, H - B, W - R, H - B);
-  s += buf;
-  std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n", L, T, L, H - B);
-  s += buf;
-  for (double t = 0, st = nice_step(tmax); t <= tmax + 1e-9; t += st) {
-    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ccc\"/><text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%g</text>\n",
-                  x(t), T, x(t), H - B, x(t), H - B + 18, t);
+  auto put = [&](const char* fmt, auto... args) {
+    std::snprintf(buf, sizeof buf, fmt, args...);
     s += buf;
-  }
-  for (double v = 0, sv = nice_step(vmax); v <= vmax + 1e-9; v += sv) {
-    std::snprintf(buf, sizeof buf, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ccc\"/><text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%g</text>\n",
-                  L, y(v), W - R, y(v), L - 6, y(v) + 4, v);
-    s += buf;
-  }
-  std::snprintf(buf, sizeof buf, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">time (ms)</text>\n", (L + W - R) / 2, H - 15);
-  s += buf;
-  std::snprintf(buf, sizeof buf, "<text transform=\"translate(20 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity (pulses/s)</text>\n", (T + H - B) / 2);
-  s += buf;
-  auto polyline = [&](const std::vector<std::pair<double, double>>& c, const char* id, const char* colour,
-                      const char* extra) {
-    s += std::string("<polyline id=\"") + id + "\" fill=\"none\" stroke=\"" + colour + "\" stroke-width=\"2\" " + extra + " points=\"";
-    size_t stride = std::max<size_t>(1, c.size() / 4000);  // a few thousand points at most
-    for (size_t i = 0; i < c.size(); i += stride) {
-      std::snprintf(buf, sizeof buf, "%.2f,%.2f ", x(c[i].first), y(c[i].second));
-      s += buf;
-    }
-    if (!c.empty()) {
-      std::snprintf(buf, sizeof buf, "%.2f,%.2f", x(c.back().first), y(c.back().second));
-      s += buf;
+  };
+  put("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
+      "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
+      kWidth, kHeight, kWidth, kHeight);
+  std::string total = r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
+  put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(), static_cast<long long>(r.input.aq3),
+      static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6),
+      static_cast<long long>(r.input.aq7));
+  put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth, kHeight);
+  put("<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
+      "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
+      kLeft, total.c_str(), static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
+      static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7),
+      r.triangular ? " (triangular)" : "");
+
+  // Grid, tick marks and tick labels.
+  auto line = [&](double xa, double ya, double xb, double yb) {
+    put("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>\n", xa, ya, xb, yb);
+  };
+  auto text = [&](double x, double y, const char* anchor, const std::string& what) {
+    put("<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"%s\">%s</text>\n", x, y, anchor, what.c_str());
+  };
+  const double tstep = nice_step(f.tmax, 8), vstep = nice_step(f.vmax, 6);
+  auto each_tick = [](double step, double max, auto fn) {
+    for (int i = 0; i * step <= max * (1 + 1e-9); ++i) fn(i * step);
+  };
+  s += "<g id=\"grid\" stroke=\"#dddddd\" stroke-width=\"1\">\n";
+  each_tick(tstep, f.tmax, [&](double t) { line(f.x(t), y0, f.x(t), y1); });
+  each_tick(vstep, f.vmax, [&](double v) { line(x0, f.y(v), x1, f.y(v)); });
+  s += "</g>\n<g id=\"axes\" stroke=\"black\" stroke-width=\"1\">\n";
+  line(x0, y0, x1, y0);
+  line(x0, y0, x0, y1);
+  each_tick(tstep, f.tmax, [&](double t) { line(f.x(t), y0, f.x(t), y0 + 5); });
+  each_tick(vstep, f.vmax, [&](double v) { line(x0 - 5, f.y(v), x0, f.y(v)); });
+  s += "</g>\n<g id=\"tick-labels\" fill=\"black\">\n";
+  each_tick(tstep, f.tmax, [&](double t) { text(f.x(t), y0 + 19, "middle", number(t)); });
+  each_tick(vstep, f.vmax, [&](double v) { text(x0 - 8, f.y(v) + 4, "end", number(v)); });
+  s += "</g>\n";
+  text((x0 + x1) / 2, kHeight - 14, "middle", "time (ms)");
+  put("<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity (pulses/s)</text>\n",
+      (y0 + y1) / 2);
+
+  // The two series, clipped to the plot area.
+  put("<defs><clipPath id=\"plot-area\">"
+      "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
+      x0, y1 - 2, x1 - x0, y0 - y1 + 4);
+  auto polyline = [&](const Curve& c, const char* id, const char* colour, const char* extra) {
+    s += std::string("<polyline id=\"") + id + "\" clip-path=\"url(#plot-area)\" fill=\"none\" stroke=\"" + colour +
+         "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"" + extra + " points=\"";
+    bool first = true;
+    for (auto [px, py] : screen_points(c, f)) {
+      put(first ? "%.2f,%.2f" : " %.2f,%.2f", px, py);
+      first = false;
     }
     s += "\"/>\n";
   };
   polyline(r.engine_curve, "engine", "#1f77b4", "");
-  polyline(r.ideal_curve, "stpcalc", "#d62728", "stroke-dasharray=\"6 4\"");
-  std::snprintf(buf, sizeof buf,
-                "<g><line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" stroke-dasharray=\"6 4\"/>"
-                "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B)</text>"
-                "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" stroke-width=\"2\"/>"
-                "<text x=\"%.0f\" y=\"%.0f\">engine (quantised ramp)</text></g>\n",
-                W - 260, T + 10, W - 230, T + 10, W - 222, T + 14, W - 260, T + 30, W - 230, T + 30, W - 222, T + 34);
-  s += buf;
+  polyline(r.ideal_curve, "stpcalc", "#d62728", " stroke-dasharray=\"7 4\"");
+
+  // Legend, above the plot area so it never covers a curve.
+  double lx = kLeft, ly = 50;
+  put("<g id=\"legend\">"
+      "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" stroke-dasharray=\"7 4\"/>"
+      "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4);
+  lx += 400;
+  put("<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" stroke-width=\"2\"/>"
+      "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D ticks</text></g>\n",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4);
   s += "</svg>\n";
   return s;
 }

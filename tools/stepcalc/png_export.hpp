@@ -1,0 +1,11 @@
+// SVG -> PNG with rsvg-convert (Debian package librsvg2-bin), run at run time.
+#pragma once
+#include <string>
+
+namespace stepnode::tools {
+
+// Writes `svg` as a PNG to `png_path` through `rsvg-convert` on the PATH. Throws
+// std::runtime_error with a clear message when the tool is missing or fails.
+void write_png(const std::string& svg, const std::string& png_path);
+
+}  // namespace stepnode::tools
