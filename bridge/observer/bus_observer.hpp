@@ -1,0 +1,52 @@
+// The bridge's view of a CAN bus: finds nodes from boot-up and heartbeat, reads what it
+// needs over SDO (identity, name, axes, every TPDO's COB-ID and mapping), decodes TPDOs,
+// heartbeats, EMCY and SYNC, and hands the results to a SampleSink. Pure: frames in,
+// frames out, time passed in, so it runs in virtual time in tests.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "bridge/samples.hpp"
+#include "od/can_frame.hpp"
+
+namespace stepnode::bridge {
+
+struct ObserverConfig {
+  uint32_t heartbeat_timeout_ms = 0;   // 0: 3 x the node's heartbeat interval (seen), min 1000
+  uint32_t sdo_timeout_ms = 500;
+  uint32_t sdo_quiet_ms = 300;         // wait for another master's SDO traffic to end
+  uint32_t retry_initial_ms = 200;     // backoff after a failed discovery, doubling ...
+  uint32_t retry_max_ms = 10'000;      // ... up to this
+  uint32_t health_period_ms = 1000;    // NodeHealth republished at least this often
+};
+
+// A frame as the socket delivered it.
+struct ObservedFrame {
+  od::CanFrame frame;
+  uint64_t can_time_ns = 0;  // kernel receive timestamp, CLOCK_REALTIME
+  bool error_frame = false;
+  uint32_t error_class = 0;  // CAN_ERR_* bits of an error frame
+  uint8_t controller_status = 0;
+};
+
+class BusObserver {
+ public:
+  BusObserver(SampleSink& sink, ObserverConfig config = {});
+  ~BusObserver();
+  BusObserver(const BusObserver&) = delete;
+  BusObserver& operator=(const BusObserver&) = delete;
+
+  // A frame from the bus; SDO requests the observer sends go to `out`.
+  void on_frame(const ObservedFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
+  // Timers: SDO timeouts, retries, heartbeat loss, periodic NodeHealth.
+  void on_tick(uint64_t now_us, uint64_t realtime_ns, std::vector<od::CanFrame>& out);
+  // Shutdown: dispose every known node's axes.
+  void dispose_all();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace stepnode::bridge
