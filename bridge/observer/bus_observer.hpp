@@ -44,6 +44,11 @@ class BusObserver {
   // Shutdown: dispose every known node's axes.
   void dispose_all();
 
+  // Read-only views (tests, logs, the DDS side's statistics).
+  const BusCounters& counters() const;
+  // The node's health as it would be published now; state Unknown for a node never seen.
+  NodeHealthSample node_health(uint8_t node, uint64_t now_us) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

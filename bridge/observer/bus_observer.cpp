@@ -1,0 +1,287 @@
+// BusObserver: routes each frame to the part that understands it and keeps one record
+// per node (heartbeat, SDO channel, discovery cursor, health). Routing order matters:
+// TPDO COB-IDs are looked up first (a remapped TPDO may use any free identifier), then
+// the pre-defined connection set (CiA 301 7.3.3).
+#include "bridge/observer/bus_observer.hpp"
+
+#include <array>
+
+#include "bridge/observer/bus_error_counter.hpp"
+#include "bridge/observer/discovery_plan.hpp"
+#include "bridge/observer/emcy_decoder.hpp"
+#include "bridge/observer/heartbeat_monitor.hpp"
+#include "bridge/observer/retry_backoff.hpp"
+#include "bridge/observer/sdo_channel.hpp"
+#include "bridge/observer/tpdo_decoder.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+constexpr uint16_t kPdoParamsFirst = 0x1800;  // TPDO communication 0x1800.., mapping 0x1A00..
+constexpr uint16_t kPdoParamsLast = 0x1BFF;
+
+struct Node {
+  Node(uint8_t id, const ObserverConfig& c)
+      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000),
+        backoff(c.retry_initial_ms, c.retry_max_ms) {
+    health.node = id;
+  }
+  HeartbeatMonitor heartbeat;
+  SdoChannel sdo;
+  DiscoveryPlan plan;
+  RetryBackoff backoff;
+  NodeHealthSample health;  // counters and last EMCY live here between publications
+  uint8_t published_axes = 0;  // axis instances the sink may hold (disposed on loss)
+  uint64_t last_health_us = 0;
+};
+
+bool sdo_allowed(NodeState s) {
+  // CiA 301 7.3.2.2.1: SDO works in pre-operational and operational. The boot-up message
+  // is sent on entering pre-operational.
+  return s == NodeState::BootUp || s == NodeState::PreOperational || s == NodeState::Operational;
+}
+
+}  // namespace
+
+struct BusObserver::Impl {
+  Impl(SampleSink& s, ObserverConfig c) : sink(s), config(c), tpdo(s) {}
+
+  SampleSink& sink;
+  ObserverConfig config;
+  TpdoDecoder tpdo;
+  BusCounters counters;
+  std::array<std::unique_ptr<Node>, kNodeIds> nodes;
+  // SDO traffic to nodes not known yet: the quiet wait must count it when they appear.
+  std::array<uint64_t, kNodeIds> early_sdo_us{};
+
+  Node* find(uint8_t id) { return id > 0 && id < kNodeIds ? nodes[id].get() : nullptr; }
+  Node& get(uint8_t id) {
+    if (!nodes[id]) {
+      nodes[id] = std::make_unique<Node>(id, config);
+      if (early_sdo_us[id]) nodes[id]->sdo.note_foreign(early_sdo_us[id]);
+    }
+    return *nodes[id];
+  }
+
+  void on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t now, std::vector<od::CanFrame>& out);
+  void on_emcy(uint8_t id, const ObservedFrame& f, uint64_t now);
+  void on_sdo(uint8_t id, const od::CanFrame& f, uint64_t now, std::vector<od::CanFrame>& out);
+  void bad(Node* n) {
+    ++counters.bad_frames;
+    if (n) ++n->health.bad_frames;
+  }
+
+  void begin_discovery(uint8_t id, Node& n);
+  void read_done(uint8_t id, Node& n, uint64_t now, std::vector<od::CanFrame>& out);
+  void sdo_failed(Node& n, uint64_t now);
+  void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
+  void lose(uint8_t id, Node& n, uint64_t now);
+  void publish_health(Node& n, uint64_t now);
+  NodeHealthSample health_now(const Node& n, uint64_t now) const;
+};
+
+BusObserver::BusObserver(SampleSink& sink, ObserverConfig config)
+    : impl_(std::make_unique<Impl>(sink, config)) {}
+BusObserver::~BusObserver() = default;
+
+const BusCounters& BusObserver::counters() const { return impl_->counters; }
+
+NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
+  if (node == 0 || node >= kNodeIds || !impl_->nodes[node]) {
+    NodeHealthSample s;
+    s.node = node;
+    s.bus = impl_->counters;
+    return s;
+  }
+  return impl_->health_now(*impl_->nodes[node], now_us);
+}
+
+void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector<od::CanFrame>& out) {
+  Impl& m = *impl_;
+  ++m.counters.frames;
+  if (of.error_frame) return count_error_frame(m.counters, of.error_class, of.controller_status);
+  const od::CanFrame& f = of.frame;
+  if (f.id > 0x7FF || f.dlc > 8) return m.bad(nullptr);
+
+  uint8_t tpdo_node = 0;
+  if (!f.rtr) {
+    switch (m.tpdo.on_frame(of, tpdo_node)) {
+      case TpdoDecoder::Result::Decoded:
+        if (Node* n = m.find(tpdo_node)) ++n->health.frames;
+        return;
+      case TpdoDecoder::Result::TooShort: return m.bad(m.find(tpdo_node));
+      case TpdoDecoder::Result::NotATpdo: break;
+    }
+  }
+  // Remote frames (node guarding, TPDO requests) carry nothing to decode.
+  if (f.rtr) {
+    ++m.counters.undecoded;
+    return;
+  }
+  const auto id = static_cast<uint8_t>(f.id & 0x7F);
+  const uint32_t function = f.id & 0x780;
+  if (f.id == od::cob::kNmt) return;  // NMT commands: the heartbeats that follow tell the state
+  if (f.id == od::cob::kSync) {
+    if (f.dlc > 1) return m.bad(nullptr);  // CiA 301 7.2.5.3: no data, or the counter
+    m.tpdo.on_sync(f.dlc == 1 ? f.data[0] : 0);
+    return;
+  }
+  if (id != 0) {
+    if (function == od::cob::kEmcyBase) return m.on_emcy(id, of, now_us);
+    if (function == od::cob::kSdoTx || function == od::cob::kSdoRx) return m.on_sdo(id, f, now_us, out);
+    if (function == od::cob::kHeartbeat) return m.on_heartbeat(id, f, now_us, out);
+  }
+  ++m.counters.undecoded;
+}
+
+void BusObserver::Impl::on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t now,
+                                     std::vector<od::CanFrame>& out) {
+  const auto state = f.dlc == 1 ? nmt_state_from_byte(f.data[0]) : std::nullopt;
+  if (!state) return bad(find(id));
+  const bool is_new = !nodes[id];
+  Node& n = get(id);
+  ++n.health.frames;
+  const HeartbeatMonitor::Change c = n.heartbeat.on_heartbeat(*state, now);
+  if (is_new || c.boot_up || c.was_lost) {
+    // Everything the node had may be different now (stored values back after a reset,
+    // another firmware after a loss): read it all again, and decode nothing until then.
+    if (!is_new) tpdo.forget(id);
+    begin_discovery(id, n);
+  }
+  if (*state == NodeState::Stopped) n.sdo.cancel();  // a stopped node answers no SDO
+  if (is_new || c.state_changed) publish_health(n, now);
+  pump(n, now, out);
+}
+
+void BusObserver::Impl::on_emcy(uint8_t id, const ObservedFrame& of, uint64_t now) {
+  Node* n = find(id);
+  auto sample = decode_emcy(id, of.frame, of.can_time_ns, n && n->plan.info().is_stepnode());
+  if (!sample) return bad(n);
+  sink.emergency(*sample);
+  if (!n) return;  // an EMCY alone does not make a node known (no state to publish)
+  ++n->health.frames;
+  n->health.last_emcy_code = sample->code;
+  n->health.error_register = sample->error_register;
+  publish_health(*n, now);
+}
+
+void BusObserver::Impl::on_sdo(uint8_t id, const od::CanFrame& f, uint64_t now,
+                               std::vector<od::CanFrame>& out) {
+  Node* n = find(id);
+  if (!n) {
+    ++counters.undecoded;  // SDO with a node we never heard a heartbeat from
+    early_sdo_us[id] = now;
+    return;
+  }
+  if (f.id == od::cob::kSdoTx + id) ++n->health.frames;
+  const SdoChannel::FrameEvent ev = n->sdo.on_frame(f, now, out);
+  if (ev.collision) sdo_failed(*n, now);
+  if (ev.foreign_download && *ev.foreign_download >= kPdoParamsFirst &&
+      *ev.foreign_download <= kPdoParamsLast) {
+    // A master is remapping a TPDO: stop decoding it now (its next frames may already
+    // use the new layout) and read the TPDO parameters again once the channel is quiet.
+    tpdo.suspend(id, static_cast<uint16_t>(*ev.foreign_download & 0x1FF));
+    n->plan.restart_tpdos();
+  }
+  if (ev.completed) read_done(id, *n, now, out);
+  else pump(*n, now, out);
+}
+
+void BusObserver::Impl::begin_discovery(uint8_t id, Node& n) {
+  n.sdo.cancel();
+  n.plan.restart_all();
+  n.backoff.reset();
+  n.health.discovered = false;
+  (void)id;
+}
+
+void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
+  const bool was_finished = n.plan.finished();
+  const ReadOutcome r = n.plan.on_result(n.sdo.result());
+  if (r == ReadOutcome::Failed) {
+    sdo_failed(n, now);
+    return;
+  }
+  n.backoff.reset();
+  if (!was_finished && n.plan.finished()) {
+    const NodeInfo& info = n.plan.info();
+    tpdo.install(id, info);
+    n.published_axes = std::max(n.published_axes, info.axes);
+    n.health.discovered = true;
+    publish_health(n, now);
+  }
+  pump(n, now, out);
+}
+
+void BusObserver::Impl::sdo_failed(Node& n, uint64_t now) {
+  ++n.health.sdo_failures;
+  n.backoff.failed(now);
+  publish_health(n, now);
+}
+
+void BusObserver::Impl::pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
+  if (n.plan.finished() || !sdo_allowed(n.heartbeat.state())) return;
+  if (!n.backoff.ready(now) || !n.sdo.can_start(now)) return;
+  const SdoRead r = n.plan.next();
+  n.sdo.start_upload(r.index, r.sub, now, out);
+}
+
+void BusObserver::Impl::lose(uint8_t id, Node& n, uint64_t now) {
+  n.sdo.cancel();
+  tpdo.forget(id);
+  publish_health(n, now);
+  if (n.published_axes) sink.dispose_axes(id, n.published_axes);
+  n.published_axes = 0;
+}
+
+NodeHealthSample BusObserver::Impl::health_now(const Node& n, uint64_t now) const {
+  NodeHealthSample s = n.health;
+  const NodeInfo& info = n.plan.info();
+  s.state = n.heartbeat.state();
+  s.is_stepnode = info.is_stepnode();
+  s.device_name = info.device_name;
+  s.vendor_id = info.vendor_id;
+  s.product_code = info.product_code;
+  s.revision = info.revision;
+  s.serial = info.serial;
+  s.axes = info.axes;
+  s.heartbeat_age_ms = n.heartbeat.age_ms(now);
+  s.bus = counters;
+  return s;
+}
+
+void BusObserver::Impl::publish_health(Node& n, uint64_t now) {
+  n.last_health_us = now;
+  sink.node_health(health_now(n, now));
+}
+
+void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/, std::vector<od::CanFrame>& out) {
+  Impl& m = *impl_;
+  const uint64_t health_period_us = uint64_t{m.config.health_period_ms} * 1000;
+  for (unsigned id = 1; id < kNodeIds; ++id) {
+    Node* n = m.nodes[id].get();
+    if (!n) continue;
+    const auto node = static_cast<uint8_t>(id);
+    if (n->sdo.on_tick(now_us, out)) m.read_done(node, *n, now_us, out);
+    const NodeInfo& info = n->plan.info();
+    if (n->heartbeat.check_lost(now_us, m.config.heartbeat_timeout_ms, info.heartbeat_period_ms,
+                                info.heartbeat_period_read)) {
+      m.lose(node, *n, now_us);
+      continue;
+    }
+    m.pump(*n, now_us, out);
+    if (now_us - n->last_health_us >= health_period_us) m.publish_health(*n, now_us);
+  }
+}
+
+void BusObserver::dispose_all() {
+  Impl& m = *impl_;
+  for (unsigned id = 1; id < kNodeIds; ++id) {
+    Node* n = m.nodes[id].get();
+    if (!n || !n->published_axes) continue;
+    m.sink.dispose_axes(static_cast<uint8_t>(id), n->published_axes);
+    n->published_axes = 0;
+  }
+}
+
+}  // namespace stepnode::bridge

@@ -1,0 +1,210 @@
+#include "bridge/observer/discovery_plan.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "od/axis_objects.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+using od::SdoAbort;
+
+constexpr uint16_t kHeartbeatTime = 0x1017;
+constexpr uint16_t kIdentity = 0x1018;
+constexpr uint16_t kDeviceName = 0x1008;
+constexpr uint16_t kTpdoComm = 0x1800;
+constexpr uint16_t kTpdoMap = 0x1A00;
+constexpr uint32_t kCobInvalid = 0x80000000u;
+// HP 44714A PSCALE (REAL64, user units per step), one per axis block.
+constexpr uint16_t kPscaleOffset = 0x11;
+
+// Little-endian unsigned of exactly `size` bytes; a value of another size is a device
+// error that retrying will not fix, so the caller takes it as absent.
+bool exact_u32(const od::Bytes& d, size_t size, uint32_t& out) {
+  if (d.size() != size) return false;
+  out = 0;
+  for (size_t i = 0; i < size; ++i) out |= static_cast<uint32_t>(d[i]) << (8 * i);
+  return true;
+}
+
+}  // namespace
+
+ReadOutcome classify(const od::SdoResult& r) {
+  if (r.ok()) return ReadOutcome::Value;
+  if (!r.aborted_by_server) return ReadOutcome::Failed;
+  // 0x0601xxxx access, 0x0602xxxx no object, 0x0609xxxx sub-index/value: the node means it.
+  const uint32_t code = static_cast<uint32_t>(r.abort);
+  const uint32_t group = code >> 16;
+  if (group == 0x0601 || group == 0x0602 || group == 0x0609) return ReadOutcome::Absent;
+  return ReadOutcome::Failed;
+}
+
+void DiscoveryPlan::restart_all() {
+  phase_ = Phase::HeartbeatTime;
+  k_ = 0;
+  entry_ = count_ = 0;
+  new_tpdos_.clear();
+  info_ = NodeInfo{};
+}
+
+void DiscoveryPlan::restart_tpdos() {
+  if (phase_ < Phase::TpdoComm || !info_.is_stepnode()) return;
+  phase_ = Phase::TpdoComm;
+  k_ = 0;
+  new_tpdos_.clear();
+}
+
+SdoRead DiscoveryPlan::next() const {
+  switch (phase_) {
+    case Phase::HeartbeatTime: return {kHeartbeatTime, 0};
+    case Phase::Identity: return {kIdentity, static_cast<uint8_t>(k_)};
+    case Phase::Name: return {kDeviceName, 0};
+    case Phase::AxisProbe: return {od::axis_obj::index(k_, od::axis_obj::kStatusBits), 0};
+    case Phase::Pscale: return {od::axis_obj::index(k_, kPscaleOffset), 0};
+    case Phase::TpdoComm: return {static_cast<uint16_t>(kTpdoComm + k_), 1};
+    case Phase::TpdoCount: return {static_cast<uint16_t>(kTpdoMap + k_), 0};
+    case Phase::TpdoEntry: return {static_cast<uint16_t>(kTpdoMap + k_), entry_};
+    case Phase::Done: break;
+  }
+  return {};
+}
+
+ReadOutcome DiscoveryPlan::on_result(const od::SdoResult& result) {
+  if (finished()) return ReadOutcome::Failed;
+  const ReadOutcome outcome = classify(result);
+  if (outcome == ReadOutcome::Value) value(result.data);
+  else if (outcome == ReadOutcome::Absent) absent();
+  return outcome;  // Failed: the cursor stays, the same read is repeated
+}
+
+void DiscoveryPlan::value(const od::Bytes& d) {
+  uint32_t v = 0;
+  switch (phase_) {
+    case Phase::HeartbeatTime:
+      if (exact_u32(d, 2, v)) {
+        info_.heartbeat_period_ms = static_cast<uint16_t>(v);
+        info_.heartbeat_period_read = true;
+      }
+      phase_ = Phase::Identity;
+      k_ = 1;
+      return;
+    case Phase::Identity:
+      if (exact_u32(d, 4, v)) {
+        info_.identity_read = true;
+        uint32_t* field[] = {&info_.vendor_id, &info_.product_code, &info_.revision, &info_.serial};
+        *field[k_ - 1] = v;
+      }
+      if (++k_ > 4) phase_ = Phase::Name;
+      return;
+    case Phase::Name: {
+      // VISIBLE_STRING; some devices pad with NULs.
+      size_t n = d.size();
+      while (n > 0 && d[n - 1] == 0) --n;
+      info_.device_name.assign(d.begin(), d.begin() + static_cast<long>(n));
+      return after_name();
+    }
+    case Phase::AxisProbe:
+      info_.axes = static_cast<uint8_t>(k_ + 1);
+      if (++k_ >= kMaxAxes) after_axes();
+      return;
+    case Phase::Pscale: {
+      double scale = 1.0;
+      if (d.size() == sizeof(double)) std::memcpy(&scale, d.data(), sizeof(double));
+      // A zero or non-finite scale would turn every position into nonsense: keep 1.0.
+      info_.pscale[k_] = (std::isfinite(scale) && scale != 0.0) ? scale : 1.0;
+      if (++k_ >= info_.axes) {
+        phase_ = Phase::TpdoComm;
+        k_ = 0;
+      }
+      return;
+    }
+    case Phase::TpdoComm:
+      if (!exact_u32(d, 4, v) || (v & kCobInvalid)) return next_tpdo();
+      pending_ = TpdoInfo{k_, static_cast<uint16_t>(v & 0x7FF), {}};
+      phase_ = Phase::TpdoCount;
+      return;
+    case Phase::TpdoCount:
+      count_ = d.size() == 1 ? std::min<uint8_t>(d[0], od::kMaxMappedEntries) : 0;
+      if (count_ == 0) {
+        new_tpdos_.push_back(pending_);  // a valid TPDO with nothing mapped: known, empty
+        return next_tpdo();
+      }
+      entry_ = 1;
+      phase_ = Phase::TpdoEntry;
+      return;
+    case Phase::TpdoEntry:
+      if (!exact_u32(d, 4, v)) return next_tpdo();  // unreadable mapping: not decoded
+      pending_.mapping.push_back(od::MappedEntry::from_word(v));
+      if (++entry_ > count_) {
+        new_tpdos_.push_back(std::move(pending_));
+        next_tpdo();
+      }
+      return;
+    case Phase::Done: return;
+  }
+}
+
+void DiscoveryPlan::absent() {
+  switch (phase_) {
+    case Phase::HeartbeatTime:
+      phase_ = Phase::Identity;
+      k_ = 1;
+      return;
+    case Phase::Identity:
+      // No identity object at all: the other sub-indices are not there either.
+      if (k_ == 1) phase_ = Phase::Name;
+      else if (++k_ > 4) phase_ = Phase::Name;
+      return;
+    case Phase::Name: return after_name();
+    case Phase::AxisProbe: return after_axes();
+    case Phase::Pscale:
+      info_.pscale[k_] = 1.0;
+      if (++k_ >= info_.axes) {
+        phase_ = Phase::TpdoComm;
+        k_ = 0;
+      }
+      return;
+    case Phase::TpdoComm:  // no more TPDOs: the new mapping replaces the old at once
+      info_.tpdos = std::move(new_tpdos_);
+      new_tpdos_.clear();
+      phase_ = Phase::Done;
+      return;
+    case Phase::TpdoCount:
+    case Phase::TpdoEntry: return next_tpdo();  // this TPDO's mapping unreadable: skipped
+    case Phase::Done: return;
+  }
+}
+
+void DiscoveryPlan::after_name() {
+  // Only a stepnode has axis blocks worth probing; a third-party device's 0x2001 means
+  // something else entirely.
+  if (info_.product_code != kStepnodeProductCode) {
+    phase_ = Phase::Done;
+    return;
+  }
+  phase_ = Phase::AxisProbe;
+  k_ = 0;
+}
+
+void DiscoveryPlan::after_axes() {
+  if (info_.axes == 0) {  // "STEP" product code without 0x2001: not ours after all
+    phase_ = Phase::Done;
+    return;
+  }
+  phase_ = Phase::Pscale;
+  k_ = 0;
+}
+
+void DiscoveryPlan::next_tpdo() {
+  entry_ = count_ = 0;
+  if (++k_ >= kMaxTpdos) {
+    info_.tpdos = std::move(new_tpdos_);
+    new_tpdos_.clear();
+    phase_ = Phase::Done;
+    return;
+  }
+  phase_ = Phase::TpdoComm;
+}
+
+}  // namespace stepnode::bridge

@@ -1,0 +1,79 @@
+// The list of SDO reads that discovers a node, as a cursor: next() names the read to do,
+// on_result() takes its answer and moves on. No SDO client and no time in here, so the
+// order and the decisions ("absent" vs "failed, try again") are tested on their own.
+//
+// Order: heartbeat time 0x1017 first (the heartbeat-loss timeout needs it before a second
+// heartbeat was seen), identity 0x1018:1..4, name 0x1008; then, for a stepnode only,
+// axis blocks 0x2n01 (n = 0.. until "no object"), PSCALE 0x2n11 per axis, and every TPDO
+// 0x1800+k:1 until "no object" with the mapping 0x1A00+k:0..n of the valid ones.
+#pragma once
+#include <cstdint>
+
+#include "bridge/observer/node_info.hpp"
+#include "od/sdo_client.hpp"
+
+namespace stepnode::bridge {
+
+struct SdoRead {
+  uint16_t index = 0;
+  uint8_t sub = 0;
+  bool operator==(const SdoRead&) const = default;
+};
+
+enum class ReadOutcome {
+  Value,   // the node answered with a value
+  Absent,  // the node says the object cannot be read: taken as "not there"
+  Failed,  // no usable answer (timeout, busy, protocol error): the same read again later
+};
+
+// How an SDO result is taken: the server's "no object / no sub-index / no access" answers
+// mean absent; timeouts, client-detected errors and 0x0800xxxx (general, device state)
+// are transient and retried.
+ReadOutcome classify(const od::SdoResult& result);
+
+class DiscoveryPlan {
+ public:
+  DiscoveryPlan() { restart_all(); }
+
+  // From the first read: after a boot-up, or a node seen again after it was lost.
+  void restart_all();
+  // Only the TPDO parameters again (another master remapped one). Identity and axes are
+  // kept. No effect before the TPDO phase (it is still to come) or on a non-stepnode.
+  void restart_tpdos();
+
+  bool finished() const { return phase_ == Phase::Done; }
+  // True once identity, name and axes are known (the TPDO phase or later).
+  bool identity_done() const { return phase_ >= Phase::TpdoComm; }
+  SdoRead next() const;  // only while !finished()
+  ReadOutcome on_result(const od::SdoResult& result);
+
+  const NodeInfo& info() const { return info_; }
+
+ private:
+  enum class Phase : uint8_t {
+    HeartbeatTime,
+    Identity,
+    Name,
+    AxisProbe,
+    Pscale,
+    TpdoComm,
+    TpdoCount,
+    TpdoEntry,
+    Done,
+  };
+  void value(const od::Bytes& data);
+  void absent();
+  void after_name();
+  void after_axes();
+  void next_tpdo();
+
+  Phase phase_ = Phase::HeartbeatTime;
+  uint16_t k_ = 0;     // identity sub, axis or TPDO number, by phase
+  uint8_t entry_ = 0;  // mapping entry being read (1-based)
+  uint8_t count_ = 0;  // mapping entries of TPDO k_
+  TpdoInfo pending_;   // the TPDO being read
+  std::vector<TpdoInfo> new_tpdos_;
+  NodeInfo info_;
+};
+
+}  // namespace stepnode::bridge

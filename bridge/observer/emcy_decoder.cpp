@@ -1,0 +1,59 @@
+#include "bridge/observer/emcy_decoder.hpp"
+
+#include "od/emcy_text.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+// %I1..%I8 (node/motion/axis_registers.hpp status::): bits 5 and 6 are not used by the
+// modules and are named by number if they ever appear.
+constexpr const char* kErrorBitNames[8] = {
+    "emergency stop", "lower limit", "upper limit", "illegal move",
+    "motor stalled",  "error bit 6", "error bit 7", "power-up/watchdog",
+};
+
+constexpr uint16_t kAxisErrorFirst = 0xFF01;
+constexpr uint16_t kAxisErrorLast = 0xFF08;
+
+}  // namespace
+
+std::string axis_error_bits_text(uint8_t bits) {
+  std::string out;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!(bits & (1u << i))) continue;
+    if (!out.empty()) out += ", ";
+    out += kErrorBitNames[i];
+  }
+  return out;
+}
+
+std::string emcy_text(uint16_t code, uint8_t reg, const std::array<uint8_t, 5>& m, bool stepnode) {
+  std::string text;
+  if (stepnode && code >= kAxisErrorFirst && code <= kAxisErrorLast) {
+    text = "axis " + std::to_string(code - 0xFF00) + " error";
+    const std::string latched = axis_error_bits_text(m[0]);
+    if (!latched.empty()) text += ": " + latched;
+    // The status word says which errors are latched in all (earlier ones too).
+    const uint8_t others = static_cast<uint8_t>(m[1] & ~m[0]);
+    if (others) text += " (also latched: " + axis_error_bits_text(others) + ")";
+  } else {
+    text = od::emcy_code_text(code);
+  }
+  text += "; error register: " + od::error_register_text(reg);
+  return text;
+}
+
+std::optional<EmergencySample> decode_emcy(uint8_t node, const od::CanFrame& f,
+                                           uint64_t can_time_ns, bool stepnode) {
+  if (f.dlc != 8 || f.rtr) return std::nullopt;
+  EmergencySample s;
+  s.node = node;
+  s.code = od::get_u16(f.data.data());
+  s.error_register = f.data[2];
+  for (size_t i = 0; i < s.manufacturer.size(); ++i) s.manufacturer[i] = f.data[3 + i];
+  s.text = emcy_text(s.code, s.error_register, s.manufacturer, stepnode);
+  s.can_time_ns = can_time_ns;
+  return s;
+}
+
+}  // namespace stepnode::bridge

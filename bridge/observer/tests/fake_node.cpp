@@ -1,0 +1,97 @@
+#include "fake_node.hpp"
+
+#include "od/sdo_protocol.hpp"
+
+namespace stepnode::bridge::test {
+
+using od::Access;
+using od::DataType;
+
+namespace {
+
+void build_third_party(od::Dictionary& d, const FakeNodeOptions& o) {
+  // Another vendor's I/O module: identity and name, one TPDO of its own, and a 0x2001 that
+  // means something else (it must not be taken for an axis block).
+  d.var(0x1000, "Device type", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(0x191));
+  d.var(0x1008, "Manufacturer device name", DataType::VisibleString, Access::Const,
+        od::encode_string(o.name));
+  d.var(0x1017, "Producer heartbeat time", DataType::Unsigned16, Access::ReadWrite,
+        od::encode<uint16_t>(100));
+  od::Object& id = d.record(0x1018, "Identity object");
+  id.add(1, "Vendor-ID", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(0x000000AB));
+  id.add(2, "Product code", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(o.product_code));
+  id.add(3, "Revision", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(7));
+  id.add(4, "Serial", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(99));
+  if (o.has_2001) d.var(0x2001, "Digital inputs", DataType::Unsigned16, Access::ReadOnly, od::encode<uint16_t>(0), true);
+}
+
+}  // namespace
+
+FakeNode::FakeNode(FakeNodeOptions options)
+    : options_(std::move(options)), server_(od_, od::cob::kSdoTx + options_.id) {
+  if (!options_.stepnode) {
+    build_third_party(od_, options_);
+    return;
+  }
+  od::DeviceInfo info;
+  info.node_id = options_.id;
+  info.axes = options_.axes;
+  info.device_name = options_.name;
+  info.serial_number = 4242;
+  od::build_device_dictionary(od_, info);
+  for (unsigned a = 0; a < options_.axes; ++a) {
+    if (options_.pscale > 0)
+      od_.var(od::axis_obj::index(a, 0x11), "PSCALE", DataType::Real64, Access::ReadWrite,
+              od::encode<double>(options_.pscale));
+    if (options_.hp_objects) {
+      od_.var(od::axis_obj::index(a, 0x18), "DONE?", DataType::Integer8, Access::ReadOnly,
+              od::encode<int8_t>(0), true);
+      od_.var(od::axis_obj::index(a, 0x19), "HP error", DataType::Unsigned8, Access::ReadOnly,
+              od::encode<uint8_t>(0), true);
+    }
+  }
+}
+
+void FakeNode::on_frame(const od::CanFrame& f, uint64_t now_us, std::vector<od::CanFrame>& out) {
+  if (f.id != od::cob::kSdoRx + id()) return;
+  ++requests_seen;
+  if (silent) return;
+  if (abort_next > 0 && f.data[0] != od::sdo::kAbortByte) {
+    --abort_next;
+    out.push_back(od::sdo::abort_frame(od::cob::kSdoTx + id(), od::get_u16(&f.data[1]), f.data[3],
+                                       od::SdoAbort::General));
+    return;
+  }
+  server_.on_request(f, now_us, out);
+}
+
+od::CanFrame FakeNode::tpdo(unsigned k) {
+  const auto comm = static_cast<uint16_t>(0x1800 + k), map = static_cast<uint16_t>(0x1A00 + k);
+  od::PdoMapping mapping;
+  const uint8_t n = od_.get<uint8_t>(map, 0);
+  for (uint8_t i = 1; i <= n; ++i)
+    mapping.push_back(od::MappedEntry::from_word(od_.get<uint32_t>(map, i)));
+  const std::vector<uint8_t> data = od::pack_pdo(od_, mapping);
+  return od::CanFrame(od_.get<uint32_t>(comm, 1) & 0x7FF, std::span<const uint8_t>(data));
+}
+
+od::CanFrame FakeNode::emcy(uint16_t code, uint8_t reg, std::array<uint8_t, 5> m) const {
+  return od::CanFrame(0x080 + id(), {static_cast<uint8_t>(code), static_cast<uint8_t>(code >> 8), reg,
+                                     m[0], m[1], m[2], m[3], m[4]});
+}
+
+void FakeNode::set_status(unsigned axis, uint16_t bits) {
+  od_.put<uint16_t>(od::axis_obj::index(axis, od::axis_obj::kStatusBits), 0, bits);
+}
+
+void FakeNode::set_position(unsigned axis, int32_t motor, int32_t encoder) {
+  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kMotorPosition), 0, motor);
+  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kEncoderPosition), 0, encoder);
+}
+
+void FakeNode::set_velocity(unsigned axis, int32_t velocity, uint8_t phase) {
+  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kVelocity), 0, velocity);
+  od_.put<uint8_t>(od::axis_obj::index(axis, od::axis_obj::kMotionPhase), 0, phase);
+}
+
+}  // namespace stepnode::bridge::test

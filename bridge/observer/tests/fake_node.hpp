@@ -1,0 +1,62 @@
+// A CANopen node for the observer's tests: a real stepnode dictionary (or a third-party
+// device's small one) behind od's SDO server, plus builders for the frames a node sends
+// (boot-up, heartbeat, TPDO packed by its current mapping, EMCY). Knobs make its SDO
+// server misbehave (silent, aborting) for the retry tests.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "od/axis_objects.hpp"
+#include "od/can_frame.hpp"
+#include "od/device_dictionary.hpp"
+#include "od/dictionary.hpp"
+#include "od/pdo_mapping.hpp"
+#include "od/sdo_server.hpp"
+
+namespace stepnode::bridge::test {
+
+struct FakeNodeOptions {
+  uint8_t id = 5;
+  unsigned axes = 3;
+  bool stepnode = true;       // false: a third-party device (identity, name, no axes)
+  double pscale = 0;          // >0: 0x2n11 PSCALE present with this value (all axes)
+  bool hp_objects = false;    // 0x2n18 DONE? I8 and 0x2n19 HP error U8, mappable
+  std::string name = "stepnode";
+  // Third-party device only:
+  uint32_t product_code = 0x00001234;
+  bool has_2001 = true;       // its own (non-axis) object at 0x2001
+};
+
+class FakeNode {
+ public:
+  explicit FakeNode(FakeNodeOptions options = {});
+
+  uint8_t id() const { return options_.id; }
+  od::Dictionary& dictionary() { return od_; }
+
+  // A request frame from the bus (only 0x600+id is looked at); responses go to `out`.
+  void on_frame(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
+
+  od::CanFrame boot_up() const { return od::CanFrame(0x700 + id(), {0x00}); }
+  od::CanFrame heartbeat(uint8_t state = 0x05) const { return od::CanFrame(0x700 + id(), {state}); }
+  // TPDO k (0-based) as the node would send it now, by its current COB-ID and mapping.
+  od::CanFrame tpdo(unsigned k);
+  od::CanFrame emcy(uint16_t code, uint8_t reg, std::array<uint8_t, 5> m) const;
+
+  // Axis values (axis 0-based) the next TPDOs carry.
+  void set_status(unsigned axis, uint16_t bits);
+  void set_position(unsigned axis, int32_t motor, int32_t encoder);
+  void set_velocity(unsigned axis, int32_t velocity, uint8_t phase);
+
+  // Misbehaviour of the SDO server.
+  bool silent = false;          // requests are not answered (the client times out)
+  unsigned abort_next = 0;      // the next N requests get abort 0x08000000 (general error)
+  unsigned requests_seen = 0;   // SDO requests received
+
+ private:
+  FakeNodeOptions options_;
+  od::Dictionary od_;
+  od::SdoServer server_;
+};
+
+}  // namespace stepnode::bridge::test

@@ -1,0 +1,189 @@
+#include "bridge/observer/tpdo_decoder.hpp"
+
+#include "od/axis_objects.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+constexpr uint16_t kAxisBlocksFirst = 0x2000;
+constexpr uint16_t kAxisBlocksLast = 0x2000 + 0x100 * kMaxAxes - 1;
+constexpr uint16_t kDoneCodeOffset = 0x18;
+constexpr uint16_t kHpErrorOffset = 0x19;
+
+int64_t sign_extend(uint64_t v, unsigned bits) {
+  if (bits == 0 || bits >= 64) return static_cast<int64_t>(v);
+  const uint64_t sign = uint64_t{1} << (bits - 1);
+  return static_cast<int64_t>((v ^ sign) - sign);
+}
+
+}  // namespace
+
+MappedAxisField axis_field_of(const od::MappedEntry& e) {
+  if (e.index < kAxisBlocksFirst || e.index > kAxisBlocksLast || e.sub != 0) return {};
+  const auto axis = static_cast<uint8_t>((e.index - kAxisBlocksFirst) >> 8);
+  using namespace od::axis_obj;
+  switch (e.index & 0xFF) {
+    case kStatusBits: return {axis, AxisField::StatusBits};
+    case kMotorPosition: return {axis, AxisField::MotorPosition};
+    case kEncoderPosition: return {axis, AxisField::EncoderPosition};
+    case kVelocity: return {axis, AxisField::Velocity};
+    case kMotionPhase: return {axis, AxisField::MotionPhase};
+    case kDoneCodeOffset: return {axis, AxisField::DoneCode};
+    case kHpErrorOffset: return {axis, AxisField::HpError};
+    default: return {};
+  }
+}
+
+TpdoDecoder::TpdoDecoder(SampleSink& sink) : sink_(sink) {}
+
+void TpdoDecoder::clear_slots(uint8_t node) {
+  for (const CompiledTpdo& t : nodes_[node].tpdos)
+    if (slots_[t.cob_id].node == node) slots_[t.cob_id] = Slot{};
+}
+
+void TpdoDecoder::install(uint8_t node, const NodeInfo& info) {
+  if (node == 0 || node >= kNodeIds) return;
+  clear_slots(node);
+  NodeTpdos& n = nodes_[node];
+  n.tpdos.clear();
+  n.axis_count = info.axes;
+  for (unsigned a = 0; a < kMaxAxes; ++a) n.axes[a].pscale = info.pscale[a];
+  for (const TpdoInfo& t : info.tpdos) {
+    // CiA 301 limits a mapping to 64 bits; a longer one cannot come from a real device and
+    // would not fit the 64-bit unpacking below.
+    if (od::mapping_bits(t.mapping) > od::kMaxPdoBits || t.cob_id >= slots_.size()) continue;
+    CompiledTpdo c;
+    c.number = t.number;
+    c.cob_id = t.cob_id;
+    c.bytes = static_cast<uint8_t>(od::mapping_bytes(t.mapping));
+    unsigned offset = 0;
+    for (const od::MappedEntry& e : t.mapping) {
+      const MappedAxisField m = axis_field_of(e);
+      if (m.field != AxisField::None && m.axis < info.axes && e.bits > 0 &&
+          c.field_count < c.fields.size())
+        c.fields[c.field_count++] = Field{static_cast<uint8_t>(offset), e.bits, m.axis, m.field};
+      offset += e.bits;
+    }
+    n.tpdos.push_back(c);
+  }
+  for (size_t i = 0; i < n.tpdos.size(); ++i) {
+    // Two nodes on one COB-ID is a bus configuration error; the later-discovered wins.
+    Slot& s = slots_[n.tpdos[i].cob_id];
+    if (s.node != 0 && s.node != node) {
+      NodeTpdos& other = nodes_[s.node];
+      for (CompiledTpdo& t : other.tpdos)
+        if (t.cob_id == n.tpdos[i].cob_id) t.suspended = true;
+    }
+    s = Slot{node, static_cast<uint16_t>(i)};
+  }
+}
+
+void TpdoDecoder::forget(uint8_t node) {
+  if (node == 0 || node >= kNodeIds) return;
+  clear_slots(node);
+  NodeTpdos& n = nodes_[node];
+  n.tpdos.clear();
+  for (AxisState& a : n.axes) {
+    const double pscale = a.pscale;
+    a = AxisState{};
+    a.pscale = pscale;
+  }
+}
+
+void TpdoDecoder::suspend(uint8_t node, uint16_t tpdo_number) {
+  if (node == 0 || node >= kNodeIds) return;
+  for (CompiledTpdo& t : nodes_[node].tpdos)
+    if (t.number == tpdo_number) t.suspended = true;
+}
+
+TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
+  NodeTpdos& n = nodes_[slot.node];
+  const CompiledTpdo& t = n.tpdos[slot.tpdo];
+  if (t.suspended) return Result::NotATpdo;
+  const od::CanFrame& f = of.frame;
+  if (f.dlc < t.bytes) return Result::TooShort;  // CiA 301: not processed, nothing applied
+
+  uint64_t raw = 0;
+  for (unsigned i = 0; i < 8; ++i) raw |= uint64_t{f.data[i]} << (8 * i);
+
+  uint8_t status_changed = 0, position_touched = 0;  // bit per axis
+  for (unsigned i = 0; i < t.field_count; ++i) {
+    const Field& fl = t.fields[i];
+    uint64_t v = raw >> fl.bit_offset;
+    if (fl.bits < 64) v &= (uint64_t{1} << fl.bits) - 1;
+    AxisState& a = n.axes[fl.axis];
+    const uint8_t bit = static_cast<uint8_t>(1u << fl.axis);
+    switch (fl.field) {
+      case AxisField::StatusBits: {
+        const auto s = static_cast<uint16_t>(v);
+        if (!a.status_known || s != a.status_bits) status_changed |= bit;
+        a.status_bits = s;
+        a.status_known = true;
+        break;
+      }
+      case AxisField::DoneCode: {
+        const auto d = static_cast<int8_t>(sign_extend(v, fl.bits));
+        if (d != a.done_code) status_changed |= bit;
+        a.done_code = d;
+        break;
+      }
+      case AxisField::HpError: {
+        const auto e = static_cast<uint8_t>(v);
+        if (e != a.hp_error) status_changed |= bit;
+        a.hp_error = e;
+        break;
+      }
+      case AxisField::MotorPosition:
+        a.motor_position = static_cast<int32_t>(sign_extend(v, fl.bits));
+        position_touched |= bit;
+        break;
+      case AxisField::EncoderPosition:
+        a.encoder_position = static_cast<int32_t>(sign_extend(v, fl.bits));
+        position_touched |= bit;
+        break;
+      case AxisField::Velocity:
+        a.velocity = static_cast<int32_t>(sign_extend(v, fl.bits));
+        position_touched |= bit;
+        break;
+      case AxisField::MotionPhase:
+        a.motion_phase = static_cast<uint8_t>(v);
+        position_touched |= bit;
+        break;
+      case AxisField::None: break;
+    }
+  }
+
+  for (unsigned ax = 0; status_changed && ax < kMaxAxes; ++ax) {
+    if (!(status_changed & (1u << ax))) continue;
+    const AxisState& a = n.axes[ax];
+    AxisStatusSample s;
+    s.node = slot.node;
+    s.axis = static_cast<uint8_t>(ax + 1);
+    s.status_bits = a.status_bits;
+    s.done_code = a.done_code;
+    s.hp_error = a.hp_error;
+    s.can_time_ns = of.can_time_ns;
+    sink_.axis_status(s);
+  }
+  for (unsigned ax = 0; position_touched && ax < kMaxAxes; ++ax) {
+    if (!(position_touched & (1u << ax))) continue;
+    const AxisState& a = n.axes[ax];
+    AxisPositionSample p;
+    p.node = slot.node;
+    p.axis = static_cast<uint8_t>(ax + 1);
+    p.motor_position = a.motor_position;
+    p.encoder_position = a.encoder_position;
+    // PSCALE is user units per step. The encoder gets the same scale: the bridge reads no
+    // separate encoder scale, so with PSCALE 1 both stay in their own counts.
+    p.motor_user_units = a.motor_position * a.pscale;
+    p.encoder_user_units = a.encoder_position * a.pscale;
+    p.velocity = a.velocity;
+    p.motion_phase = a.motion_phase;
+    p.sync_counter = sync_counter_;
+    p.can_time_ns = of.can_time_ns;
+    sink_.axis_position(p);
+  }
+  return Result::Decoded;
+}
+
+}  // namespace stepnode::bridge
