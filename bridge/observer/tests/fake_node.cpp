@@ -62,6 +62,10 @@ void FakeNode::on_frame(const od::CanFrame& f, uint64_t now_us, std::vector<od::
                                        od::SdoAbort::General));
     return;
   }
+  if (hold) {
+    server_.on_request(f, now_us, held);
+    return;
+  }
   server_.on_request(f, now_us, out);
 }
 

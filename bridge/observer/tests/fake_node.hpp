@@ -52,6 +52,8 @@ class FakeNode {
   bool silent = false;          // requests are not answered (the client times out)
   unsigned abort_next = 0;      // the next N requests get abort 0x08000000 (general error)
   unsigned requests_seen = 0;   // SDO requests received
+  bool hold = false;            // responses are kept in `held` until the test releases them
+  std::vector<od::CanFrame> held;
 
  private:
   FakeNodeOptions options_;

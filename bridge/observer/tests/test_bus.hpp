@@ -59,6 +59,15 @@ class TestBus {
     send(node.boot_up());
   }
 
+  // The node's held SDO responses go out now, and it answers at once again.
+  void release(FakeNode& node) {
+    node.hold = false;
+    std::vector<od::CanFrame> frames;
+    frames.swap(node.held);
+    for (const od::CanFrame& f : frames) queue_.push_back({f, Origin::Other});
+    drain();
+  }
+
   void master_start(uint8_t node) {
     master = std::make_unique<od::SdoClient>(0x600 + node, 0x580 + node);
   }
