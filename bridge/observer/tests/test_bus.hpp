@@ -32,6 +32,7 @@ class TestBus {
   std::vector<Beat> nodes;
   std::unique_ptr<od::SdoClient> master;  // another master on the bus
   std::vector<od::CanFrame> observer_sent;
+  std::vector<uint64_t> observer_sent_at;  // virtual time of each, us
   bool echo_observer_frames = false;
   uint64_t now_us = 1'000'000;
 
@@ -122,7 +123,10 @@ class TestBus {
     while (!queue_.empty()) {
       const Queued q = queue_.front();
       queue_.pop_front();
-      if (q.origin == Origin::Observer) observer_sent.push_back(q.frame);
+      if (q.origin == Origin::Observer) {
+        observer_sent.push_back(q.frame);
+        observer_sent_at.push_back(now_us);
+      }
       if (q.origin != Origin::Observer || echo_observer_frames) {
         out.clear();
         ObservedFrame of;
