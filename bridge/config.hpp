@@ -1,0 +1,30 @@
+// stepbridge's settings: command line (CLI11) over a TOML config file with the same keys.
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace stepnode::bridge {
+
+struct BridgeConfig {
+  std::string iface;
+  uint32_t domain = 0;
+  bool ros2 = false;
+  std::string ros2_prefix = "stepnode";
+  std::string profiles;         // Fast DDS XML profiles file
+  std::string log_level = "info";
+  uint32_t tick_ms = 10;        // observer timers (SDO timeouts, heartbeat loss, health)
+  uint32_t heartbeat_timeout_ms = 0;  // 0: 3 x the node's heartbeat interval, min 1000
+  uint32_t sdo_timeout_ms = 500;
+};
+
+// Bad input: the message is the one line printed before exiting with status 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Parses the command line and the --config file (the command line wins). `exit_now` is set
+// for --help (exit_code 0). Throws UsageError.
+BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, int& exit_code);
+
+}  // namespace stepnode::bridge

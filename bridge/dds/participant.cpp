@@ -1,0 +1,44 @@
+#include "bridge/dds/participant.hpp"
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace stepnode::bridge::dds {
+namespace efd = eprosima::fastdds::dds;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+efd::DomainParticipant* create_participant(const ParticipantOptions& options) {
+  if (options.domain > kMaxDomain)
+    throw std::runtime_error("domain " + std::to_string(options.domain) + ": must be 0.." + std::to_string(kMaxDomain));
+  auto* factory = efd::DomainParticipantFactory::get_instance();
+  if (!options.profiles_file.empty()) {
+    if (!std::filesystem::is_regular_file(options.profiles_file))
+      throw std::runtime_error("profiles " + options.profiles_file + ": cannot read file");
+    if (factory->load_XML_profiles_file(options.profiles_file) != ReturnCode_t::RETCODE_OK)
+      throw std::runtime_error("profiles " + options.profiles_file + ": Fast DDS rejected the XML");
+  }
+  // Loads the environment's default profile file (once per process) and makes its default
+  // participant profile the default participant QoS. Must come before the QoS is read.
+  factory->load_profiles();
+
+  efd::DomainParticipantQos qos = factory->get_default_participant_qos();
+  if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) == ReturnCode_t::RETCODE_OK)
+    spdlog::debug("participant QoS from XML profile {}", kParticipantProfile);
+  if (qos.name().to_string().empty() || qos.name().to_string() == "RTPSParticipant") qos.name(options.name);
+  efd::DomainParticipant* participant = factory->create_participant(options.domain, qos);
+  if (!participant)
+    throw std::runtime_error("DDS domain " + std::to_string(options.domain) + ": Fast DDS could not create a participant");
+  return participant;
+}
+
+void delete_participant(efd::DomainParticipant* participant) {
+  if (!participant) return;
+  participant->delete_contained_entities();
+  efd::DomainParticipantFactory::get_instance()->delete_participant(participant);
+}
+
+}  // namespace stepnode::bridge::dds

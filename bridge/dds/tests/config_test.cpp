@@ -1,0 +1,93 @@
+// stepbridge's command line and TOML config: the command line wins, bad input is one line.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bridge/config.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+BridgeConfig parse(std::vector<std::string> args) {
+  args.insert(args.begin(), "stepbridge");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  bool exit_now = false;
+  int exit_code = 0;
+  return parse_bridge_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() / (name + "-" + std::to_string(getpid()));
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string error_of(std::vector<std::string> args) {
+  try {
+    parse(std::move(args));
+  } catch (const UsageError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(BridgeConfig, Defaults) {
+  auto cfg = parse({"--iface", "vcan0"});
+  EXPECT_EQ(cfg.iface, "vcan0");
+  EXPECT_EQ(cfg.domain, 0u);
+  EXPECT_FALSE(cfg.ros2);
+  EXPECT_EQ(cfg.ros2_prefix, "stepnode");
+  EXPECT_EQ(cfg.profiles, "");
+  EXPECT_EQ(cfg.log_level, "info");
+  EXPECT_EQ(cfg.tick_ms, 10u);
+}
+
+TEST(BridgeConfig, Options) {
+  auto cfg = parse({"--iface", "can1", "--domain", "42", "--ros2", "--ros2-prefix", "line/a", "--log-level", "debug"});
+  EXPECT_EQ(cfg.iface, "can1");
+  EXPECT_EQ(cfg.domain, 42u);
+  EXPECT_TRUE(cfg.ros2);
+  EXPECT_EQ(cfg.ros2_prefix, "line/a");
+  EXPECT_EQ(cfg.log_level, "debug");
+}
+
+TEST(BridgeConfig, FileKeysAndTheCommandLineWins) {
+  auto file = write_file("bridge.toml",
+                         "iface = \"can0\"\ndomain = 7\nros2 = true\nros2_prefix = \"cell\"\n"
+                         "log_level = \"warn\"\ntick_ms = 5\nheartbeat_timeout_ms = 2500\nsdo_timeout_ms = 800\n");
+  auto cfg = parse({"--config", file, "--domain", "9"});
+  EXPECT_EQ(cfg.iface, "can0");
+  EXPECT_EQ(cfg.domain, 9u);
+  EXPECT_TRUE(cfg.ros2);
+  EXPECT_EQ(cfg.ros2_prefix, "cell");
+  EXPECT_EQ(cfg.log_level, "warn");
+  EXPECT_EQ(cfg.tick_ms, 5u);
+  EXPECT_EQ(cfg.heartbeat_timeout_ms, 2500u);
+  EXPECT_EQ(cfg.sdo_timeout_ms, 800u);
+  std::filesystem::remove(file);
+}
+
+TEST(BridgeConfig, BadInputIsOneLineNamingTheProblem) {
+  EXPECT_EQ(error_of({}), "no CAN interface: give --iface IFACE (or iface in the config file)");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--domain", "233"}), "domain 233: must be 0..232");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--ros2-prefix", "x"}), "--ros2-prefix needs --ros2");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--profiles", "/nonexistent.xml"}), "profiles /nonexistent.xml: cannot read file");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--log-level", "loud"}),
+            "log level \"loud\": must be trace, debug, info, warn, error, critical or off");
+  EXPECT_NE(error_of({"--iface", "vcan0", "--bogus"}), "");
+  EXPECT_EQ(error_of({"--config", "/nonexistent.toml"}), "config /nonexistent.toml: cannot read file");
+  auto file = write_file("bad.toml", "iface = \"can0\"\ndomain = \"one\"\n");
+  EXPECT_EQ(error_of({"--config", file}), "config " + file + ": domain: must be an integer 0..232");
+  auto unknown = write_file("unknown.toml", "iface = \"can0\"\nnode_id = 3\n");
+  EXPECT_EQ(error_of({"--config", unknown}), "config " + unknown + ": node_id: unknown key");
+  std::filesystem::remove(file);
+  std::filesystem::remove(unknown);
+}
+
+}  // namespace
+}  // namespace stepnode::bridge
