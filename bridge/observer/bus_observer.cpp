@@ -65,14 +65,14 @@ struct BusObserver::Impl {
 
   void on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t now, std::vector<od::CanFrame>& out);
   void on_emcy(uint8_t id, const ObservedFrame& f, uint64_t now);
-  void on_sdo(uint8_t id, const od::CanFrame& f, uint64_t now, std::vector<od::CanFrame>& out);
+  void on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now, std::vector<od::CanFrame>& out);
   void bad(Node* n) {
     ++counters.bad_frames;
     if (n) ++n->health.bad_frames;
   }
 
   void begin_discovery(uint8_t id, Node& n);
-  void read_done(uint8_t id, Node& n, uint64_t now, std::vector<od::CanFrame>& out);
+  void read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
   void sdo_failed(Node& n, uint64_t now);
   void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
   void lose(uint8_t id, Node& n, uint64_t now);
@@ -128,7 +128,7 @@ void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector
   }
   if (id != 0) {
     if (function == od::cob::kEmcyBase) return m.on_emcy(id, of, now_us);
-    if (function == od::cob::kSdoTx || function == od::cob::kSdoRx) return m.on_sdo(id, f, now_us, out);
+    if (function == od::cob::kSdoTx || function == od::cob::kSdoRx) return m.on_sdo(id, of, now_us, out);
     if (function == od::cob::kHeartbeat) return m.on_heartbeat(id, f, now_us, out);
   }
   ++m.counters.undecoded;
@@ -165,8 +165,9 @@ void BusObserver::Impl::on_emcy(uint8_t id, const ObservedFrame& of, uint64_t no
   publish_health(*n, now);
 }
 
-void BusObserver::Impl::on_sdo(uint8_t id, const od::CanFrame& f, uint64_t now,
+void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now,
                                std::vector<od::CanFrame>& out) {
+  const od::CanFrame& f = of.frame;
   Node* n = find(id);
   if (!n) {
     ++counters.undecoded;  // SDO with a node we never heard a heartbeat from
@@ -183,7 +184,7 @@ void BusObserver::Impl::on_sdo(uint8_t id, const od::CanFrame& f, uint64_t now,
     tpdo.suspend(id, static_cast<uint16_t>(*ev.foreign_download & 0x1FF));
     n->plan.restart_tpdos();
   }
-  if (ev.completed) read_done(id, *n, now, out);
+  if (ev.completed) read_done(id, *n, now, of.can_time_ns, out);
   else pump(*n, now, out);
 }
 
@@ -195,18 +196,24 @@ void BusObserver::Impl::begin_discovery(uint8_t id, Node& n) {
   (void)id;
 }
 
-void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
-  const bool was_finished = n.plan.finished();
+void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
+                                  std::vector<od::CanFrame>& out) {
+  const bool had_mapping = n.plan.mapping_read(), was_finished = n.plan.finished();
   const ReadOutcome r = n.plan.on_result(n.sdo.result());
   if (r == ReadOutcome::Failed) {
     sdo_failed(n, now);
     return;
   }
   n.backoff.reset();
-  if (!was_finished && n.plan.finished()) {
-    const NodeInfo& info = n.plan.info();
+  const NodeInfo& info = n.plan.info();
+  // TPDOs are decoded from the moment their mapping is known, before the snapshot of
+  // the axes is read: a TPDO during the snapshot is newer than the snapshot.
+  if (!had_mapping && n.plan.mapping_read()) {
     tpdo.install(id, info);
     n.published_axes = std::max(n.published_axes, info.axes);
+  }
+  if (!was_finished && n.plan.finished()) {
+    tpdo.seed(id, info, can_time_ns);
     n.health.discovered = true;
     publish_health(n, now);
   }
@@ -262,7 +269,7 @@ void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/, std::vector
     Node* n = m.nodes[id].get();
     if (!n) continue;
     const auto node = static_cast<uint8_t>(id);
-    if (n->sdo.on_tick(now_us, out)) m.read_done(node, *n, now_us, out);
+    if (n->sdo.on_tick(now_us, out)) m.read_done(node, *n, now_us, 0, out);
     const NodeInfo& info = n->plan.info();
     if (n->heartbeat.check_lost(now_us, m.config.heartbeat_timeout_ms, info.heartbeat_period_ms,
                                 info.heartbeat_period_read)) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <iterator>
 
 #include "od/axis_objects.hpp"
 
@@ -18,6 +19,9 @@ constexpr uint16_t kTpdoMap = 0x1A00;
 constexpr uint32_t kCobInvalid = 0x80000000u;
 // HP 44714A PSCALE (REAL64, user units per step), one per axis block.
 constexpr uint16_t kPscaleOffset = 0x11;
+// What the snapshot reads of each axis, in this order.
+constexpr uint16_t kSnapshotOffsets[] = {0x01, 0x18, 0x19, 0x05, 0x06};
+constexpr uint8_t kSnapshotItems = std::size(kSnapshotOffsets);
 
 // Little-endian unsigned of exactly `size` bytes; a value of another size is a device
 // error that retrying will not fix, so the caller takes it as absent.
@@ -42,6 +46,7 @@ ReadOutcome classify(const od::SdoResult& r) {
 
 void DiscoveryPlan::restart_all() {
   phase_ = Phase::HeartbeatTime;
+  snapshot_wanted_ = true;
   k_ = 0;
   entry_ = count_ = 0;
   new_tpdos_.clear();
@@ -50,8 +55,14 @@ void DiscoveryPlan::restart_all() {
 
 void DiscoveryPlan::restart_tpdos() {
   if (phase_ < Phase::TpdoComm || !info_.is_stepnode()) return;
+  // The snapshot is read again only when the remap came before it was finished.
+  if (phase_ == Phase::Done) {
+    snapshot_wanted_ = false;
+    info_.snapshot = {};  // the caller seeds from it at the end: nothing stale
+  }
   phase_ = Phase::TpdoComm;
   k_ = 0;
+  entry_ = count_ = 0;
   new_tpdos_.clear();
 }
 
@@ -65,6 +76,8 @@ SdoRead DiscoveryPlan::next() const {
     case Phase::TpdoComm: return {static_cast<uint16_t>(kTpdoComm + k_), 1};
     case Phase::TpdoCount: return {static_cast<uint16_t>(kTpdoMap + k_), 0};
     case Phase::TpdoEntry: return {static_cast<uint16_t>(kTpdoMap + k_), entry_};
+    case Phase::Snapshot:
+      return {od::axis_obj::index(k_, kSnapshotOffsets[entry_]), 0};
     case Phase::Done: break;
   }
   return {};
@@ -141,6 +154,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
         next_tpdo();
       }
       return;
+    case Phase::Snapshot:
+      snapshot_value(d);
+      return next_snapshot();
     case Phase::Done: return;
   }
 }
@@ -165,13 +181,10 @@ void DiscoveryPlan::absent() {
         k_ = 0;
       }
       return;
-    case Phase::TpdoComm:  // no more TPDOs: the new mapping replaces the old at once
-      info_.tpdos = std::move(new_tpdos_);
-      new_tpdos_.clear();
-      phase_ = Phase::Done;
-      return;
+    case Phase::TpdoComm: return tpdos_done();  // no more TPDOs
     case Phase::TpdoCount:
     case Phase::TpdoEntry: return next_tpdo();  // this TPDO's mapping unreadable: skipped
+    case Phase::Snapshot: return next_snapshot();  // e.g. no HP objects on this node
     case Phase::Done: return;
   }
 }
@@ -198,13 +211,50 @@ void DiscoveryPlan::after_axes() {
 
 void DiscoveryPlan::next_tpdo() {
   entry_ = count_ = 0;
-  if (++k_ >= kMaxTpdos) {
-    info_.tpdos = std::move(new_tpdos_);
-    new_tpdos_.clear();
+  if (++k_ >= kMaxTpdos) return tpdos_done();
+  phase_ = Phase::TpdoComm;
+}
+
+void DiscoveryPlan::tpdos_done() {
+  // The new mapping replaces the old one at once, never entry by entry.
+  info_.tpdos = std::move(new_tpdos_);
+  new_tpdos_.clear();
+  if (!snapshot_wanted_) {
     phase_ = Phase::Done;
     return;
   }
-  phase_ = Phase::TpdoComm;
+  info_.snapshot = {};
+  phase_ = Phase::Snapshot;
+  k_ = 0;
+  entry_ = 0;
+}
+
+void DiscoveryPlan::snapshot_value(const od::Bytes& d) {
+  AxisSnapshot& s = info_.snapshot[k_];
+  uint32_t v = 0;
+  switch (kSnapshotOffsets[entry_]) {
+    case 0x01:
+      if ((s.status_read = exact_u32(d, 2, v))) s.status_bits = static_cast<uint16_t>(v);
+      break;
+    case 0x18:
+      if ((s.done_read = exact_u32(d, 1, v))) s.done_code = static_cast<int8_t>(v);
+      break;
+    case 0x19:
+      if ((s.hp_error_read = exact_u32(d, 1, v))) s.hp_error = static_cast<uint8_t>(v);
+      break;
+    case 0x05:
+      if ((s.motor_read = exact_u32(d, 4, v))) s.motor_position = static_cast<int32_t>(v);
+      break;
+    case 0x06:
+      if ((s.encoder_read = exact_u32(d, 4, v))) s.encoder_position = static_cast<int32_t>(v);
+      break;
+  }
+}
+
+void DiscoveryPlan::next_snapshot() {
+  if (++entry_ < kSnapshotItems) return;
+  entry_ = 0;
+  if (++k_ >= info_.axes) phase_ = Phase::Done;
 }
 
 }  // namespace stepnode::bridge

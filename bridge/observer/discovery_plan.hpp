@@ -5,7 +5,10 @@
 // Order: heartbeat time 0x1017 first (the heartbeat-loss timeout needs it before a second
 // heartbeat was seen), identity 0x1018:1..4, name 0x1008; then, for a stepnode only,
 // axis blocks 0x2n01 (n = 0.. until "no object"), PSCALE 0x2n11 per axis, and every TPDO
-// 0x1800+k:1 until "no object" with the mapping 0x1A00+k:0..n of the valid ones.
+// 0x1800+k:1 until "no object" with the mapping 0x1A00+k:0..n of the valid ones; last, a
+// snapshot of each axis (status 0x2n01, DONE? 0x2n18, HP error 0x2n19, motor and encoder
+// position 0x2n05/0x2n06), read after the mapping so the TPDO decoder is already live
+// (the caller installs it when mapping_read() turns true) and newer TPDO values win.
 #pragma once
 #include <cstdint>
 
@@ -42,8 +45,8 @@ class DiscoveryPlan {
   void restart_tpdos();
 
   bool finished() const { return phase_ == Phase::Done; }
-  // True once identity, name and axes are known (the TPDO phase or later).
-  bool identity_done() const { return phase_ >= Phase::TpdoComm; }
+  // True once the TPDO parameters are read (the snapshot may still be in progress).
+  bool mapping_read() const { return phase_ >= Phase::Snapshot; }
   SdoRead next() const;  // only while !finished()
   ReadOutcome on_result(const od::SdoResult& result);
 
@@ -59,6 +62,7 @@ class DiscoveryPlan {
     TpdoComm,
     TpdoCount,
     TpdoEntry,
+    Snapshot,
     Done,
   };
   void value(const od::Bytes& data);
@@ -66,11 +70,15 @@ class DiscoveryPlan {
   void after_name();
   void after_axes();
   void next_tpdo();
+  void tpdos_done();
+  void snapshot_value(const od::Bytes& d);
+  void next_snapshot();
 
   Phase phase_ = Phase::HeartbeatTime;
   uint16_t k_ = 0;     // identity sub, axis or TPDO number, by phase
   uint8_t entry_ = 0;  // mapping entry being read (1-based)
   uint8_t count_ = 0;  // mapping entries of TPDO k_
+  bool snapshot_wanted_ = true;  // not after a remap: the values are known then
   TpdoInfo pending_;   // the TPDO being read
   std::vector<TpdoInfo> new_tpdos_;
   NodeInfo info_;

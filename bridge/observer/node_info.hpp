@@ -23,6 +23,17 @@ struct TpdoInfo {
   od::PdoMapping mapping;
 };
 
+// An axis's values read over SDO at the end of discovery. Event-driven TPDOs of an idle
+// axis never come, so without this a bridge started after the nodes would know nothing.
+struct AxisSnapshot {
+  bool status_read = false, done_read = false, hp_error_read = false;
+  bool motor_read = false, encoder_read = false;
+  uint16_t status_bits = 0;
+  int8_t done_code = 0;
+  uint8_t hp_error = 0;
+  int32_t motor_position = 0, encoder_position = 0;
+};
+
 struct NodeInfo {
   bool identity_read = false;  // 0x1018 answered (absent on some third-party devices)
   uint32_t vendor_id = 0, product_code = 0, revision = 0, serial = 0;
@@ -32,6 +43,7 @@ struct NodeInfo {
   uint8_t axes = 0;                   // 0x2n01 present for n < axes
   std::array<double, kMaxAxes> pscale{1, 1, 1, 1, 1, 1, 1, 1};  // 0x2n11, 1.0 when absent
   std::vector<TpdoInfo> tpdos;        // valid TPDOs only
+  std::array<AxisSnapshot, kMaxAxes> snapshot{};
 
   // A stepnode: the product code says so AND the first axis block exists.
   bool is_stepnode() const { return product_code == kStepnodeProductCode && axes > 0; }

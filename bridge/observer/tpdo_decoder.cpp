@@ -153,37 +153,67 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
     }
   }
 
-  for (unsigned ax = 0; status_changed && ax < kMaxAxes; ++ax) {
-    if (!(status_changed & (1u << ax))) continue;
-    const AxisState& a = n.axes[ax];
-    AxisStatusSample s;
-    s.node = slot.node;
-    s.axis = static_cast<uint8_t>(ax + 1);
-    s.status_bits = a.status_bits;
-    s.done_code = a.done_code;
-    s.hp_error = a.hp_error;
-    s.can_time_ns = of.can_time_ns;
-    sink_.axis_status(s);
-  }
-  for (unsigned ax = 0; position_touched && ax < kMaxAxes; ++ax) {
-    if (!(position_touched & (1u << ax))) continue;
-    const AxisState& a = n.axes[ax];
-    AxisPositionSample p;
-    p.node = slot.node;
-    p.axis = static_cast<uint8_t>(ax + 1);
-    p.motor_position = a.motor_position;
-    p.encoder_position = a.encoder_position;
-    // PSCALE is user units per step. The encoder gets the same scale: the bridge reads no
-    // separate encoder scale, so with PSCALE 1 both stay in their own counts.
-    p.motor_user_units = a.motor_position * a.pscale;
-    p.encoder_user_units = a.encoder_position * a.pscale;
-    p.velocity = a.velocity;
-    p.motion_phase = a.motion_phase;
-    p.sync_counter = sync_counter_;
-    p.can_time_ns = of.can_time_ns;
-    sink_.axis_position(p);
-  }
+  for (unsigned ax = 0; status_changed && ax < kMaxAxes; ++ax)
+    if (status_changed & (1u << ax)) publish_status(slot.node, ax, of.can_time_ns);
+  for (unsigned ax = 0; position_touched && ax < kMaxAxes; ++ax)
+    if (position_touched & (1u << ax)) publish_position(slot.node, ax, of.can_time_ns);
   return Result::Decoded;
+}
+
+}  // namespace stepnode::bridge
+
+namespace stepnode::bridge {
+
+void TpdoDecoder::publish_status(uint8_t node, unsigned axis, uint64_t can_time_ns) {
+  const AxisState& a = nodes_[node].axes[axis];
+  AxisStatusSample s;
+  s.node = node;
+  s.axis = static_cast<uint8_t>(axis + 1);
+  s.status_bits = a.status_bits;
+  s.done_code = a.done_code;
+  s.hp_error = a.hp_error;
+  s.can_time_ns = can_time_ns;
+  sink_.axis_status(s);
+}
+
+void TpdoDecoder::publish_position(uint8_t node, unsigned axis, uint64_t can_time_ns) {
+  AxisState& a = nodes_[node].axes[axis];
+  a.position_known = true;
+  AxisPositionSample p;
+  p.node = node;
+  p.axis = static_cast<uint8_t>(axis + 1);
+  p.motor_position = a.motor_position;
+  p.encoder_position = a.encoder_position;
+  // PSCALE is user units per step. The encoder gets the same scale: the bridge reads no
+  // separate encoder scale, so with PSCALE 1 both stay in their own counts.
+  p.motor_user_units = a.motor_position * a.pscale;
+  p.encoder_user_units = a.encoder_position * a.pscale;
+  p.velocity = a.velocity;
+  p.motion_phase = a.motion_phase;
+  p.sync_counter = sync_counter_;
+  p.can_time_ns = can_time_ns;
+  sink_.axis_position(p);
+}
+
+void TpdoDecoder::seed(uint8_t node, const NodeInfo& info, uint64_t can_time_ns) {
+  if (node == 0 || node >= kNodeIds) return;
+  NodeTpdos& n = nodes_[node];
+  for (unsigned ax = 0; ax < info.axes && ax < kMaxAxes; ++ax) {
+    const AxisSnapshot& snap = info.snapshot[ax];
+    AxisState& a = n.axes[ax];
+    if (!a.status_known && snap.status_read) {
+      a.status_known = true;
+      a.status_bits = snap.status_bits;
+      if (snap.done_read) a.done_code = snap.done_code;
+      if (snap.hp_error_read) a.hp_error = snap.hp_error;
+      publish_status(node, ax, can_time_ns);
+    }
+    if (!a.position_known && snap.motor_read && snap.encoder_read) {
+      a.motor_position = snap.motor_position;
+      a.encoder_position = snap.encoder_position;
+      publish_position(node, ax, can_time_ns);
+    }
+  }
 }
 
 }  // namespace stepnode::bridge

@@ -50,6 +50,10 @@ class TpdoDecoder {
   // One TPDO no longer decoded until the next install (a master is remapping it).
   void suspend(uint8_t node, uint16_t tpdo_number);
 
+  // Values read over SDO (discovery's snapshot). Published where no TPDO has said anything
+  // since install(): a TPDO is never overridden by an older SDO read.
+  void seed(uint8_t node, const NodeInfo& info, uint64_t can_time_ns);
+
   void on_sync(uint8_t counter) { sync_counter_ = counter; }
 
   enum class Result : uint8_t { NotATpdo, Decoded, TooShort };
@@ -80,6 +84,7 @@ class TpdoDecoder {
   };
   struct AxisState {
     bool status_known = false;
+    bool position_known = false;  // a position was published since the last forget()
     uint16_t status_bits = 0;
     int8_t done_code = kDoneUnknown;
     uint8_t hp_error = 0;
@@ -98,6 +103,8 @@ class TpdoDecoder {
   };
 
   Result decode(Slot slot, const ObservedFrame& frame);
+  void publish_status(uint8_t node, unsigned axis, uint64_t can_time_ns);
+  void publish_position(uint8_t node, unsigned axis, uint64_t can_time_ns);
   void clear_slots(uint8_t node);
 
   SampleSink& sink_;

@@ -46,6 +46,7 @@ TEST(Discovery, TheMappingReadIsTheOneUsedForDecoding) {
   bus.add(node);
   bus.boot(node);
   bus.run_ms(50);
+  bus.sink.clear();  // (discovery's own snapshot of the axes)
   node.set_position(0, 1000, 998);
   bus.send(node.tpdo(1));  // TPDO2: motor and encoder position of axis 1
   ASSERT_EQ(bus.sink.positions.size(), 1u);
@@ -64,6 +65,7 @@ TEST(Discovery, PscaleAbsentMeansOne) {
   bus.add(node);
   bus.boot(node);
   bus.run_ms(50);
+  bus.sink.clear();
   node.set_position(0, -321, 5);
   bus.send(node.tpdo(1));
   ASSERT_EQ(bus.sink.positions.size(), 1u);
@@ -175,6 +177,7 @@ TEST(Discovery, TwoNodesAreDiscoveredIndependently) {
   bus.run_ms(100);
   EXPECT_TRUE(bus.observer.node_health(5, bus.now_us).discovered);
   EXPECT_TRUE(bus.observer.node_health(6, bus.now_us).discovered);
+  bus.sink.clear();
   a.set_status(0, 0x0100);
   b.set_status(0, 0x0180);
   bus.send(a.tpdo(0));

@@ -61,8 +61,8 @@ class TestBus {
   }
 
   // The node's held SDO responses go out now, and it answers at once again.
-  void release(FakeNode& node) {
-    node.hold = false;
+  void release(FakeNode& node, bool keep_holding = false) {
+    node.hold = keep_holding;
     std::vector<od::CanFrame> frames;
     frames.swap(node.held);
     for (const od::CanFrame& f : frames) queue_.push_back({f, Origin::Other});

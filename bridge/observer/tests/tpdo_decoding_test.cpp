@@ -127,6 +127,7 @@ TEST(TpdoDecoding, HpDoneCodeAndErrorNumberAreStatus) {
   bus.add(node);
   bus.boot(node);
   bus.run_ms(80);
+  bus.sink.clear();
   node.dictionary().put<int8_t>(0x2018, 0, -2);
   node.dictionary().put<uint8_t>(0x2019, 0, 91);
   bus.send(node.tpdo(3));
