@@ -87,6 +87,7 @@ void Axis::latch(uint16_t error_bits, Tick now) {
     generator_.halt(now);
     position_valid_ = false;  // SPM30 3.3.1: a sudden stop invalidates the position
   }
+  if (job_ == Job::External) end_external(ExternalEnd::Aborted, now);
   job_ = Job::None;
   waiting_for_limit_release_ = false;
   resumable_ = false;
@@ -179,6 +180,7 @@ void Axis::execute(uint16_t bit, Tick now) {
         position_valid_ = false;  // SPM30 IMMEDIATE STOP
       }
       waiting_for_limit_release_ = false;
+      if (job_ == Job::External) end_external(ExternalEnd::Aborted, now);
       job_ = Job::None;
       break;
     case command::kDecelStop:
@@ -353,6 +355,27 @@ void Axis::on_step(const Step& step) {
   motor().step(step.time, step.direction);  // the step sink
   motor_position_ += step.direction;
   if (job_ == Job::Move) ++move_done_steps_;
+  if (on_any_step) on_any_step(step);
+}
+
+void Axis::start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now) {
+  advance_to(now);
+  job_ = Job::External;
+  resumable_ = false;
+  start_motion(ramp, direction, steps, now);
+  notify(AxisEvent::StatusChanged);
+}
+
+void Axis::external_halt(Tick now) {
+  if (job_ != Job::External) return;
+  generator_.halt(now);
+  job_ = Job::None;
+  notify(AxisEvent::StatusChanged);
+}
+
+void Axis::end_external(ExternalEnd how, Tick now) {
+  job_ = Job::None;
+  if (on_external_end) on_external_end(how, now);
 }
 
 void Axis::home_event(Tick now, bool at_limit) {
@@ -403,6 +426,11 @@ void Axis::home_event(Tick now, bool at_limit) {
 void Axis::after_step(const Step& step) {
   Tick t = step.time;
   if (estop_ && *estop_) return latch(status::kEmergencyStop, t);
+  if (job_ == Job::External) {
+    check_position_valid();
+    if (on_external_step) on_external_step(step);
+    return;
+  }
   if (step.direction < 0 && motor().lower_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
       return home_event(t, /*at_limit=*/true);
@@ -444,6 +472,10 @@ void Axis::after_step(const Step& step) {
 void Axis::finish(Tick now) {
   Job job = job_;
   job_ = Job::None;
+  if (job == Job::External) {
+    end_external(ExternalEnd::Completed, now);
+    return notify(AxisEvent::StatusChanged);
+  }
   if (job == Job::Home) return notify(AxisEvent::StatusChanged);  // stopped before home
   if (job == Job::Move) {
     if (move_done_steps_ >= move_target_steps_) {

@@ -69,8 +69,27 @@ class Axis {
   void set_config(const AxisConfig& config) { config_ = config; }
   std::function<void(const AxisEvent&)> on_event;
 
+  // Another front end's job (the HP 44714A channel, node/motion/hp_channel.*): the axis
+  // runs the same generator on the same position and motor, and leaves the rules to the
+  // front end. Limits are the front end's (HP HARDLIM has its own senses and outcome); the
+  // e-stop, and the Horner stops (%Q15/%Q16), still end it.
+  enum class ExternalEnd { Completed, Aborted };
+  bool busy() const { return job_ != Job::None || generator_.moving() || waiting_for_limit_release_; }
+  bool external_job() const { return job_ == Job::External; }
+  void start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
+  void external_velocity(Tick now, int64_t level) { generator_.change_velocity(now, level); }
+  void external_stop(Tick now) { generator_.stop(now); }
+  void external_halt(Tick now);  // no ramp, no end report: the front end knows why
+  const StepGenerator& generator() const { return generator_; }
+  // Every step of an external job, after the motor took it (the front end may halt here).
+  std::function<void(const Step&)> on_external_step;
+  // The external job ended by itself (Completed) or by the e-stop or a Horner stop.
+  std::function<void(ExternalEnd, Tick)> on_external_end;
+  // Every step of any job (the HP quadrature index and first-step time watch them).
+  std::function<void(const Step&)> on_any_step;
+
  private:
-  enum class Job { None, Jog, Move, Home };
+  enum class Job { None, Jog, Move, Home, External };
   enum class HomeStage { Seek, BackToOrigin, Clear, Approach };
 
   MotorPort& motor() { return *motors_[selected_]; }
@@ -86,6 +105,7 @@ class Axis {
   void on_step(const Step& step);
   void after_step(const Step& step);
   void finish(Tick now);
+  void end_external(ExternalEnd how, Tick now);
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);

@@ -36,6 +36,10 @@ struct RampSpec {
 
   // Set for Horner register ramps: the STPCALC triangular rule applies.
   bool horner_triangle_rule = false;
+  // The slowest level a move creeps at when a ramp ends short of its target (the phase
+  // accumulator may leave a step over). 1 keeps a 0 Hz base moving; the HP channel, whose
+  // minimum may be 0 Hz, sets the velocity one step from standstill reaches.
+  int64_t min_creep_level = 1;
 };
 
 // The Horner module's ramp from %AQ3..%AQ7 (SPM30 3.4, STPCALC B1.3.1):

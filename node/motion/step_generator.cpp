@@ -23,6 +23,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_.start = start;
   decel_tick_ = -1;
   decel_floor_ = ramp.base_level;
+  holding_ = false;
   if (distance && *distance <= 0) {
     phase_ = MotionPhase::Idle;
     marks_.end = start;
@@ -32,7 +33,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_.peak_level = std::max(peak_level_, ramp.base_level);
   if (peak_level_ <= ramp.base_level) {
     phase_ = MotionPhase::Creeping;  // too short to ramp at all: the whole move at base
-    level_ = std::max<int64_t>(ramp.base_level, 1);  // a 0 Hz base still has to move
+    level_ = std::max<int64_t>(ramp.base_level, ramp.min_creep_level);  // a 0 Hz base still has to move
     marks_.decel_start = marks_.decel_end = start;
     return;
   }
@@ -96,7 +97,7 @@ void StepGenerator::end_interval() {
     return;
   }
   // Decelerating: to a lower running velocity, or to base.
-  if (decel_floor_ > ramp_.base_level && !stopping_ && level_ <= decel_floor_ + 1) {
+  if (holding_ && !stopping_ && level_ <= decel_floor_ + 1) {
     level_ = decel_floor_;
     phase_ = MotionPhase::Running;
     marks_.decel_end = t_;
@@ -112,7 +113,7 @@ void StepGenerator::end_interval() {
       marks_.end = t_;
     } else {
       phase_ = MotionPhase::Creeping;
-      level_ = std::max<int64_t>(level_, 1);
+      level_ = std::max<int64_t>(level_, ramp_.min_creep_level);
     }
     return;
   }
@@ -224,6 +225,7 @@ void StepGenerator::change_velocity(Tick at, int64_t level) {
     interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, 0);
   } else if (level < level_) {
     decel_floor_ = level;
+    holding_ = true;  // hold the lower velocity, even the base one, instead of stopping
     peak_level_ = level;
     phase_ = MotionPhase::Decelerating;
     marks_.decel_start = t_;

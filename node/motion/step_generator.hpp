@@ -80,6 +80,7 @@ class StepGenerator {
   int64_t interval_index_ = 0;
   bool stopping_ = false;   // stop(): no creep after the ramp
   Tick decel_tick_ = -1;
+  bool holding_ = false;     // change_velocity() down: run on at decel_floor_
   int64_t decel_floor_ = 0;  // the level a deceleration ends at (base, or a lower velocity)    // while running to a target: the tick deceleration begins
   int64_t steps_done_ = 0;
   Marks marks_;

@@ -1,0 +1,168 @@
+// One HP 44714A channel (HP 3852A HP 44714A manual, chapter 3) on one axis of the node: the
+// manual's commands with their rules, DONE? codes, error numbers 89-94, triggers, DELAY,
+// STANDBY, HALT/HARDLIM and the quadrature counter. It drives the same Axis (generator,
+// position, motor) as the Horner register model, through the axis' external-job interface;
+// which semantics apply is decided by which front end a command came through.
+// Pure and deterministic: time comes in as ticks.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "node/motion/axis.hpp"
+#include "node/motion/hp_position.hpp"
+#include "node/motion/hp_profile.hpp"
+#include "node/motion/hp_pulse_output.hpp"
+#include "node/motion/hp_settings.hpp"
+#include "node/motion/motor_port.hpp"
+
+namespace stepnode::motion::hp {
+
+class Channel {
+ public:
+  // `axis`: the axis this channel drives. `inputs`: its motor's inputs (limits, marker,
+  // encoder counts) as the HP terminal module sees them.
+  Channel(Axis& axis, const MotorPort& inputs);
+
+  // Power-on / reset state (3-2): every setting to its power-on value, interrupts disabled.
+  void power_up(Tick now);
+
+  // ---- set-up commands
+  Conflict profile(const Profile& p, Tick now, Error* error = nullptr);
+  Error pscale(double units_per_step);
+  void delay(uint16_t ms) { delay_ms_ = ms; }
+  Error standby(StandbyMode mode, bool sense_high, Tick now);
+  void pulse(const PulseSetup& setup) { pulse_ = setup; }
+  void hardlim(bool plim_high, bool nlim_high) { plim_high_ = plim_high, nlim_high_ = nlim_high; }
+  void halt_mode(HaltMode mode, Tick now);
+  // ---- output commands
+  Error move(double distance, bool absolute, bool nowait, Tick now);
+  Error sustain(double value, bool nowait, Tick now);
+  Error trig(TrigMode mode, Tick now);
+  void halt_sgl(Tick now);
+  // ---- position and quadrature counter
+  Error pos(double units);
+  double pos_query() const { return position_.units(axis_.motor_position()); }
+  void qscale(double units_per_count) { qscale_ = units_per_count; }
+  void qindex(QIndexMode mode);
+  int32_t quadrature_count() const;
+  double qpos_query() const { return static_cast<double>(quadrature_count()) * qscale_; }
+  // ---- interrupts
+  void enable_intr();   // clears, then enables (Command Summary: ENABLE INTR)
+  void disable_intr() { intr_enabled_ = false; }
+
+  // ---- inputs from outside the channel
+  void sync(Tick now);            // the CANopen SYNC: TRIG SYS
+  void chan0_triggered(Tick now);  // channel 0 of this node was triggered: TRIG CHAN0
+  void set_halt_input(bool level_high, Tick now);
+  void set_test_jumper(bool set) { test_jumper_ = set; }
+  // Starts what is due (DELAY, STANDBY AUTO power-off) and brings the axis to `now`.
+  void advance(Tick now);
+
+  // ---- what the master reads
+  Done done() const;
+  Error last_error() const { return last_error_; }
+  Conflict last_conflict() const { return last_conflict_; }
+  uint8_t interrupt_events() const { return events_; }
+  bool intr_enabled() const { return intr_enabled_; }
+  const Profile& active_profile() const { return profile_; }
+  double scale() const { return position_.scale(); }
+  TrigMode trig_mode() const { return trig_; }
+  uint16_t delay_ms() const { return delay_ms_; }
+  StandbyMode standby_mode() const { return standby_; }
+  bool standby_sense_high() const { return standby_high_; }
+  bool motor_powered() const { return powered_; }
+  bool stby_output_high() const { return !powered_ == standby_high_; }
+  const PulseSetup& pulse_setup() const { return pulse_; }
+  HaltMode halt_mode() const { return halt_mode_; }
+  QIndexMode qindex_mode() const { return qindex_; }
+  double qscale() const { return qscale_; }
+  bool plim_sense_high() const { return plim_high_; }
+  bool nlim_sense_high() const { return nlim_high_; }
+  double current_width() const;  // WIDTH mode: the pulse width now (s)
+  // The last triggered action: trigger tick and first step tick.
+  std::optional<Tick> trigger_time() const { return trigger_time_; }
+  std::optional<Tick> first_step_time() const { return first_step_; }
+  uint64_t pulses(Output o) const { return pulse_count_[static_cast<unsigned>(o)]; }
+  const Pulse& last_pulse() const { return last_pulse_; }
+
+  // An interrupt condition occurred while enabled (bit of hp::intr); disabled until re-enabled.
+  std::function<void(uint8_t event, Tick at)> on_interrupt;
+  // This channel was triggered (the node fans channel 0's trigger out to TRIG CHAN0).
+  std::function<void(Tick at)> on_triggered;
+
+ private:
+  enum class Action { None, Move, Sustain };
+  struct Pending {
+    Action action = Action::None;
+    int64_t steps = 0;      // MOVE
+    double rate = 0;        // SUSTAIN: steps/s (FREQ) or width s (WIDTH), signed
+  };
+  enum class Run { Idle, Move, Sustain, SustainStopping };
+
+  Error accept(Error e);
+  Error check_can_move(bool width_allowed) const;
+  Error arm(const Pending& p, bool nowait, Tick now);
+  void fire(Tick at);
+  void start(Tick at);
+  void start_move_steps(int64_t steps, Tick at);
+  void start_sustain_rate(double rate, Tick at);
+  double current_width_at(Tick t) const;
+  void end(Done how, uint8_t event, Tick at);
+  void interrupt(uint8_t event, Tick at);
+  bool limit_active(int direction) const;
+  bool halt_active() const;
+  void on_step(const Step& step);
+  void on_axis_end(Axis::ExternalEnd how, Tick at);
+  void check_sustain_reached(Tick now);
+  void width_advance(Tick now);
+  Tick delay_ticks() const;
+
+  Axis& axis_;
+  const MotorPort& inputs_;
+  // Settings.
+  Profile profile_;
+  PositionCounter position_;
+  uint16_t delay_ms_ = 0;
+  TrigMode trig_ = TrigMode::Auto;
+  StandbyMode standby_ = StandbyMode::Auto;
+  bool standby_high_ = true;
+  PulseSetup pulse_;
+  HaltMode halt_mode_ = HaltMode::Lo;
+  bool plim_high_ = false, nlim_high_ = false;
+  double qscale_ = 1.0;
+  QIndexMode qindex_ = QIndexMode::Off;
+  // Inputs.
+  bool halt_level_high_ = true;  // HALTn pulled up: the switch is open
+  bool test_jumper_ = false;
+  // State.
+  Pending pending_;
+  bool armed_ = false;               // a MOVE/SUSTAIN waits for its trigger
+  std::optional<Tick> start_at_;     // triggered, starting after DELAY
+  bool blocking_ = false;            // a command without NOWAIT has not finished
+  Run run_ = Run::Idle;
+  int direction_ = +1;
+  int64_t move_steps_ = 0, steps_taken_ = 0;
+  double sustain_rate_ = 0;          // steps/s (FREQ) the SUSTAIN asked for, clamped
+  bool sustain_reached_ = false;
+  Done outcome_ = Done::Completed;
+  Error last_error_ = Error::None;
+  Conflict last_conflict_ = Conflict::None;
+  bool intr_enabled_ = false;
+  uint8_t events_ = 0;
+  bool powered_ = false;             // motor power (STANDBY): AUTO starts unpowered
+  std::optional<Tick> idle_since_;   // STANDBY AUTO: powered down 1 s after the last move
+  std::optional<Tick> trigger_time_, first_step_;
+  bool awaiting_first_step_ = false;
+  // WIDTH mode: the width ramps from width_from_ at width_since_ toward width_target_.
+  double width_from_ = 0, width_target_ = 0;
+  Tick width_since_ = 0;
+  // Quadrature counter: counts = encoder - q_offset_; QINDEX ONCE waits for the index.
+  int64_t q_offset_ = 0;
+  bool q_waiting_for_index_ = false, q_frozen_ = false;
+  bool marker_was_ = false;
+  uint64_t pulse_count_[2] = {0, 0};
+  Pulse last_pulse_;
+};
+
+}  // namespace stepnode::motion::hp
