@@ -5,6 +5,7 @@
 #include "bridge/observer/bus_observer.hpp"
 
 #include <array>
+#include <cstdint>
 
 #include "bridge/observer/bus_error_counter.hpp"
 #include "bridge/observer/discovery_plan.hpp"
@@ -22,7 +23,7 @@ constexpr uint16_t kPdoParamsLast = 0x1BFF;
 
 struct Node {
   Node(uint8_t id, const ObserverConfig& c)
-      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000),
+      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000, c.own_frames_echoed),
         backoff(c.retry_initial_ms, c.retry_max_ms) {
     health.node = id;
   }
@@ -44,7 +45,12 @@ bool sdo_allowed(NodeState s) {
 }  // namespace
 
 struct BusObserver::Impl {
-  Impl(SampleSink& s, ObserverConfig c) : sink(s), config(c), tpdo(s) {}
+  Impl(SampleSink& s, ObserverConfig c) : sink(s), config(c), tpdo(s) {
+    // No clock and no global RNG in here; ASLR makes the address differ between two
+    // bridge processes, which is all the jitter needs.
+    random = c.random_seed ? c.random_seed
+                           : static_cast<uint32_t>(reinterpret_cast<uintptr_t>(this) >> 4) | 1u;
+  }
 
   SampleSink& sink;
   ObserverConfig config;
@@ -53,6 +59,14 @@ struct BusObserver::Impl {
   std::array<std::unique_ptr<Node>, kNodeIds> nodes;
   // SDO traffic to nodes not known yet: the quiet wait must count it when they appear.
   std::array<uint64_t, kNodeIds> early_sdo_us{};
+  uint32_t random = 1;  // xorshift32 state for the collision jitter
+
+  uint32_t next_random() {
+    random ^= random << 13;
+    random ^= random >> 17;
+    random ^= random << 5;
+    return random;
+  }
 
   Node* find(uint8_t id) { return id > 0 && id < kNodeIds ? nodes[id].get() : nullptr; }
   Node& get(uint8_t id) {
@@ -223,6 +237,9 @@ void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t ca
 void BusObserver::Impl::sdo_failed(Node& n, uint64_t now) {
   ++n.health.sdo_failures;
   n.backoff.failed(now);
+  // Two masters that failed together would otherwise try again together.
+  if (config.collision_jitter_ms)
+    n.sdo.add_quiet(uint64_t{next_random() % (config.collision_jitter_ms + 1)} * 1000);
   publish_health(n, now);
 }
 

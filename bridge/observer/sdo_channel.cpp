@@ -6,17 +6,18 @@ namespace stepnode::bridge {
 
 using namespace od::sdo;
 
-SdoChannel::SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us)
+SdoChannel::SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed)
     : node_(node),
       timeout_us_(timeout_us),
       quiet_us_(quiet_us),
+      echoed_(echoed),
       client_(std::make_unique<od::SdoClient>(od::cob::kSdoRx + node, od::cob::kSdoTx + node)) {
   client_->set_timeout_us(timeout_us_);
 }
 
 bool SdoChannel::can_start(uint64_t now_us) const {
   if (in_flight_) return false;
-  return !foreign_seen_ || now_us - last_foreign_us_ >= quiet_us_;
+  return !foreign_seen_ || now_us - last_foreign_us_ >= quiet_us_ + extra_quiet_us_;
 }
 
 void SdoChannel::start_upload(uint16_t index, uint8_t sub, uint64_t now_us,
@@ -24,6 +25,7 @@ void SdoChannel::start_upload(uint16_t index, uint8_t sub, uint64_t now_us,
   const size_t from = out.size();
   // Expedited or segmented, as the server chooses: every object discovery reads is small.
   client_->start_upload(index, sub, od::SdoClient::Mode::Auto, now_us, out);
+  extra_quiet_us_ = 0;
   in_flight_ = !client_->done();
   remember_sent(out, from, now_us);
 }
@@ -104,6 +106,7 @@ void SdoChannel::cancel() {
 }
 
 void SdoChannel::remember_sent(const std::vector<od::CanFrame>& out, size_t from, uint64_t now_us) {
+  if (!echoed_) return;
   for (size_t i = from; i < out.size(); ++i) {
     if (out[i].id != od::cob::kSdoRx + node_) continue;
     sent_[sent_next_] = Sent{out[i], now_us, true};
@@ -112,6 +115,7 @@ void SdoChannel::remember_sent(const std::vector<od::CanFrame>& out, size_t from
 }
 
 bool SdoChannel::is_own_echo(const od::CanFrame& f, uint64_t now_us) {
+  if (!echoed_) return false;
   for (Sent& s : sent_) {
     if (!s.live) continue;
     // An echo comes back within microseconds; an old entry is no longer one.

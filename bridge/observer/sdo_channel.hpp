@@ -7,7 +7,8 @@
 //  - gives a transfer up without a frame when another master starts talking mid-way,
 //  - recognises another master's confirmed download (initiate request on 0x600+id, the
 //    node's initiate response on 0x580+id) so the caller can re-read what was written,
-//  - ignores the echo of its own requests when the socket loops them back.
+//  - ignores the echo of its own requests when the socket loops them back (only when told
+//    so: two bridges reading the same object send identical frames).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -22,7 +23,8 @@ namespace stepnode::bridge {
 
 class SdoChannel {
  public:
-  SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us);
+  // `echoed`: our own requests come back from the socket (see ObserverConfig).
+  SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed = false);
 
   struct FrameEvent {
     bool completed = false;  // our transfer ended (result() holds the answer)
@@ -31,8 +33,10 @@ class SdoChannel {
   };
 
   bool idle() const { return !in_flight_; }
-  // Idle, and no other master's SDO frame for the quiet time.
+  // Idle, and no other master's SDO frame for the quiet time (plus any extra wait).
   bool can_start(uint64_t now_us) const;
+  // One-off extra quiet time before the next start (random, after a collision).
+  void add_quiet(uint64_t extra_us) { extra_quiet_us_ = extra_us; }
   void start_upload(uint16_t index, uint8_t sub, uint64_t now_us, std::vector<od::CanFrame>& out);
   // A frame on 0x600+id (a client's request) or 0x580+id (the node's response).
   FrameEvent on_frame(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
@@ -56,10 +60,12 @@ class SdoChannel {
   uint8_t node_;
   uint64_t timeout_us_;
   uint64_t quiet_us_;
+  bool echoed_;
   std::unique_ptr<od::SdoClient> client_;
   bool in_flight_ = false;
   bool foreign_seen_ = false;
   uint64_t last_foreign_us_ = 0;
+  uint64_t extra_quiet_us_ = 0;
   // Another master's download initiate, waiting for the node's confirmation.
   bool download_pending_ = false;
   uint16_t download_index_ = 0;

@@ -156,7 +156,9 @@ TEST(Discovery, WaitsForAnotherMastersSdoTrafficToEnd) {
 }
 
 TEST(Discovery, EchoOfOwnRequestsIsNotAnotherMaster) {
-  TestBus bus;
+  ObserverConfig cfg;
+  cfg.own_frames_echoed = true;
+  TestBus bus(cfg);
   bus.echo_observer_frames = true;  // a socket that loops sent frames back
   FakeNode node({.id = 5, .axes = 2});
   bus.add(node);
