@@ -19,6 +19,7 @@ MotionService::MotionService(od::Dictionary& dictionary, const od::DeviceInfo& i
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) { on_axis_event(a, e); };
   }
   install_hooks();
+  for (unsigned a = 0; a < count_; ++a) refused_words_.push_back(std::make_unique<RefusedWords>(dictionary_, a));
 }
 
 motion::Tick MotionService::ticks(uint64_t now_us) const {
@@ -40,6 +41,7 @@ void MotionService::load_words(unsigned a) {
   w.index_deceleration_ms = dictionary_.get<uint16_t>(ix, od::indexed_sub::kDeceleration);
   w.index_window_open = dictionary_.get<uint32_t>(ix, od::indexed_sub::kWindowOpen);
   w.index_window_close = dictionary_.get<uint32_t>(ix, od::indexed_sub::kWindowClose);
+  refused_words_[a]->overlay(w);
 }
 
 void MotionService::load_config(unsigned a) {
@@ -171,6 +173,7 @@ void MotionService::power_up(uint64_t now_us) {
   for (unsigned a = 0; a < count_; ++a) {
     load_config(a);
     axes_[a]->power_up(ticks(now_us));
+    refused_words_[a]->clear();
     load_words(a);
     publish(a);
   }

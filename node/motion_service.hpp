@@ -9,6 +9,7 @@
 
 #include "node/emcy.hpp"
 #include "node/motion/axis.hpp"
+#include "node/refused_words.hpp"
 #include "node/sim/machine.hpp"
 #include "od/device_dictionary.hpp"
 #include "od/dictionary.hpp"
@@ -45,6 +46,7 @@ class MotionService {
   unsigned motors_;  // simulated motors (3 behind one axis in SPM30 multiplexed mode)
   sim::Machine machine_;
   std::vector<std::unique_ptr<motion::Axis>> axes_;
+  std::vector<std::unique_ptr<RefusedWords>> refused_words_;  // RPDO words the dictionary refused
   uint64_t epoch_us_ = 0;
   bool epoch_set_ = false;
   uint64_t now_us_ = 0;

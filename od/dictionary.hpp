@@ -43,6 +43,10 @@ struct Entry {
   std::function<SdoAbort(std::span<const uint8_t>)> validate;
   // Runs after a value was accepted and stored.
   std::function<void()> on_written;
+  // A received PDO carried a value this entry refused (range, validate hook). A PDO has no
+  // answer (CiA 301 7.2.2), so the owner of the object decides what the refusal means; it
+  // runs before the PDO's on_written reactions.
+  std::function<void(std::span<const uint8_t> value, SdoAbort abort)> on_pdo_refused;
   // Refreshes `value` just before a read (positions, counters, generated text).
   std::function<void(Bytes&)> on_read;
 

@@ -82,7 +82,9 @@ SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
       Bytes value = encode<uint64_t>(read_bits(data, offset, m.bits));
       value.resize((m.bits + 7) / 8);
       SdoAbort a = dictionary.write(m.index, m.sub, value, WriteOrigin::Pdo);
-      if (a == SdoAbort::None) written.push_back(dictionary.find(m.index, m.sub));
+      Entry* e = dictionary.find(m.index, m.sub);
+      if (a == SdoAbort::None) written.push_back(e);
+      else if (e && e->on_pdo_refused) e->on_pdo_refused(value, a);
       if (first == SdoAbort::None) first = a;
     }
     offset += m.bits;

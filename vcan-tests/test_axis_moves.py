@@ -135,13 +135,9 @@ def test_axis_set_current_position(link, ax):
     assert ax.mechanical() == 3500
 
 
-# Known node bug (reported): an RPDO value outside its object's range (0x2002 destination
-# -8,388,608..+8,388,607, 0x2003 profile words) is refused by the dictionary and silently
-# dropped, while the command bit of the same or a later RPDO still runs, with the previous
-# value. Per SPM30 3.4 / B1.2 these are not legal words and the axis' own rule is an Illegal
-# Move (%I4, EMCY 0xFF01) with no motion. strict: when the node is fixed these XPASS and fail,
-# so the marker gets removed.
-@pytest.mark.xfail(strict=True, reason="node bug: out-of-range RPDO words dropped, command runs on stale words")
+# SPM30 3.4 / B1.2: words outside the module's ranges are not legal; sent in an RPDO (which
+# has no answer, unlike SDO's range abort) they make the next command an Illegal Move (%I4,
+# EMCY 0xFF01) with no motion.
 @pytest.mark.parametrize("word,value", [("destination", 8388608), ("destination", -8388609),
                                         ("AQ3", 10), ("AQ6", 0)])
 def test_axis_illegal_words_over_rpdo_are_an_illegal_move(link, ax, word, value):
