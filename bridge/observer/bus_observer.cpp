@@ -85,7 +85,7 @@ struct BusObserver::Impl {
     if (n) ++n->health.bad_frames;
   }
 
-  void begin_discovery(uint8_t id, Node& n);
+  void begin_discovery(Node& n);
   void read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
   void sdo_failed(Node& n, uint64_t now);
   void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
@@ -160,7 +160,7 @@ void BusObserver::Impl::on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t
     // Everything the node had may be different now (stored values back after a reset,
     // another firmware after a loss): read it all again, and decode nothing until then.
     if (!is_new) tpdo.forget(id);
-    begin_discovery(id, n);
+    begin_discovery(n);
   }
   if (*state == NodeState::Stopped) n.sdo.cancel();  // a stopped node answers no SDO
   if (is_new || c.state_changed) publish_health(n, now);
@@ -202,12 +202,11 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
   else pump(*n, now, out);
 }
 
-void BusObserver::Impl::begin_discovery(uint8_t id, Node& n) {
+void BusObserver::Impl::begin_discovery(Node& n) {
   n.sdo.cancel();
   n.plan.restart_all();
   n.backoff.reset();
   n.health.discovered = false;
-  (void)id;
 }
 
 void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
@@ -223,8 +222,14 @@ void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t ca
   // TPDOs are decoded from the moment their mapping is known, before the snapshot of
   // the axes is read: a TPDO during the snapshot is newer than the snapshot.
   if (!had_mapping && n.plan.mapping_read()) {
+    if (info.axes < n.published_axes) {
+      // The node came back with fewer axes (reconfigured): the sink can only dispose a
+      // node's axes 1..n together, so all go, and the live ones are published again by
+      // the snapshot and the TPDOs that follow.
+      sink.dispose_axes(id, n.published_axes);
+    }
+    n.published_axes = info.axes;
     tpdo.install(id, info);
-    n.published_axes = std::max(n.published_axes, info.axes);
   }
   if (!was_finished && n.plan.finished()) {
     tpdo.seed(id, info, can_time_ns);

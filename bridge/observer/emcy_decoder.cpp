@@ -14,6 +14,11 @@ constexpr const char* kErrorBitNames[8] = {
 
 constexpr uint16_t kAxisErrorFirst = 0xFF01;
 constexpr uint16_t kAxisErrorLast = 0xFF08;
+constexpr uint16_t kHpErrorFirst = 0xFF00 + 89;
+constexpr uint16_t kHpErrorLast = 0xFF00 + 94;
+constexpr uint16_t kHpInterruptFirst = 0xFF43;
+constexpr uint16_t kHpInterruptLast = 0xFF45;
+constexpr const char* kHpInterruptNames[] = {"hard limit", "HALT SGL", "HALT switch"};
 
 }  // namespace
 
@@ -27,9 +32,26 @@ std::string axis_error_bits_text(uint8_t bits) {
   return out;
 }
 
+const char* hp_error_text(uint8_t number) {
+  switch (number) {  // HP 44714A manual, error messages
+    case 89: return "accessory busy (a move is in progress)";
+    case 90: return "no action defined (TRIG SGL without MOVE or SUSTAIN)";
+    case 91: return "must stop to change direction";
+    case 92: return "not valid in width mode";
+    case 93: return "terminal card test jumper set";
+    case 94: return "cannot move while standby on";
+    default: return nullptr;
+  }
+}
+
 std::string emcy_text(uint16_t code, uint8_t reg, const std::array<uint8_t, 5>& m, bool stepnode) {
   std::string text;
-  if (stepnode && code >= kAxisErrorFirst && code <= kAxisErrorLast) {
+  if (stepnode && code >= kHpErrorFirst && code <= kHpErrorLast) {
+    const auto number = static_cast<uint8_t>(code - 0xFF00);
+    text = "HP error " + std::to_string(number) + ": " + hp_error_text(number);
+  } else if (stepnode && code >= kHpInterruptFirst && code <= kHpInterruptLast) {
+    text = std::string("HP interrupt: ") + kHpInterruptNames[code - kHpInterruptFirst];
+  } else if (stepnode && code >= kAxisErrorFirst && code <= kAxisErrorLast) {
     text = "axis " + std::to_string(code - 0xFF00) + " error";
     const std::string latched = axis_error_bits_text(m[0]);
     if (!latched.empty()) text += ": " + latched;

@@ -40,10 +40,14 @@ FakeNode::FakeNode(FakeNodeOptions options)
   info.serial_number = 4242;
   od::build_device_dictionary(od_, info);
   for (unsigned a = 0; a < options_.axes; ++a) {
-    if (options_.pscale > 0)
+    // The device dictionary may have the HP objects already (od/hp_objects.hpp); the
+    // values asked for here are set either way.
+    if (options_.pscale > 0 && od_.find(od::axis_obj::index(a, 0x11), 0))
+      od_.put<double>(od::axis_obj::index(a, 0x11), 0, options_.pscale);
+    else if (options_.pscale > 0)
       od_.var(od::axis_obj::index(a, 0x11), "PSCALE", DataType::Real64, Access::ReadWrite,
               od::encode<double>(options_.pscale));
-    if (options_.hp_objects) {
+    if (options_.hp_objects && !od_.find(od::axis_obj::index(a, 0x18), 0)) {
       od_.var(od::axis_obj::index(a, 0x18), "DONE?", DataType::Integer8, Access::ReadOnly,
               od::encode<int8_t>(0), true);
       od_.var(od::axis_obj::index(a, 0x19), "HP error", DataType::Unsigned8, Access::ReadOnly,

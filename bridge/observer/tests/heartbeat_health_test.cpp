@@ -145,3 +145,49 @@ TEST(Heartbeat, MalformedHeartbeatIsBad) {
 
 }  // namespace
 }  // namespace stepnode::bridge::test
+
+namespace stepnode::bridge::test {
+namespace {
+
+TEST(AxisInstances, ANodeBackWithFewerAxesHasTheGoneOnesDisposed) {
+  TestBus bus;
+  FakeNode three({.id = 5, .axes = 3});
+  FakeNode one({.id = 5, .axes = 1});
+  bus.add(three);
+  bus.boot(three);
+  bus.run_ms(50);
+  ASSERT_EQ(bus.observer.node_health(5, bus.now_us).axes, 3);
+  EXPECT_TRUE(bus.sink.disposed.empty());
+  bus.nodes[0].node = &one;  // same node id, reconfigured to one axis, restarts
+  bus.sink.clear();
+  bus.boot(one);
+  bus.run_ms(50);
+  EXPECT_EQ(bus.observer.node_health(5, bus.now_us).axes, 1);
+  ASSERT_EQ(bus.sink.disposed.size(), 1u);
+  EXPECT_EQ(bus.sink.disposed[0], std::make_pair(uint8_t{5}, uint8_t{3}));
+  ASSERT_EQ(bus.sink.statuses.size(), 1u) << "axis 1 published again after the dispose";
+  EXPECT_EQ(bus.sink.statuses[0].axis, 1);
+  // A later loss disposes the one axis that is left.
+  bus.beat_of(one).beating = false;
+  bus.run_ms(3500);
+  ASSERT_EQ(bus.sink.disposed.size(), 2u);
+  EXPECT_EQ(bus.sink.disposed[1], std::make_pair(uint8_t{5}, uint8_t{1}));
+}
+
+TEST(AxisInstances, DisposeAllAtShutdown) {
+  TestBus bus;
+  FakeNode a({.id = 5, .axes = 2}), io({.id = 0x20, .stepnode = false});
+  bus.add(a);
+  bus.add(io);
+  bus.boot(a);
+  bus.boot(io);
+  bus.run_ms(50);
+  bus.observer.dispose_all();
+  ASSERT_EQ(bus.sink.disposed.size(), 1u) << "only nodes with axes";
+  EXPECT_EQ(bus.sink.disposed[0], std::make_pair(uint8_t{5}, uint8_t{2}));
+  bus.observer.dispose_all();
+  EXPECT_EQ(bus.sink.disposed.size(), 1u) << "once";
+}
+
+}  // namespace
+}  // namespace stepnode::bridge::test
