@@ -8,6 +8,9 @@
 #include <linux/can/error.h>
 #include <spdlog/spdlog.h>
 
+#include <pthread.h>
+
+#include <csignal>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -23,7 +26,19 @@ using namespace stepnode;
 
 namespace {
 
+// SIGINT/SIGTERM blocked before any thread exists: Fast DDS starts threads when the
+// participant is created, and a thread that does not block them would take the default
+// action (the process dies without disposing). The event loop reads them via signalfd.
+void block_stop_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
 int run(const bridge::BridgeConfig& cfg) {
+  block_stop_signals();
   canio::SocketCan can(cfg.iface);  // throws: no such interface, not a CAN device
 
   bridge::dds::PublisherOptions options;

@@ -6,6 +6,7 @@
 #include <fastdds/dds/topic/Topic.hpp>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <ctime>
 #include <stdexcept>
 
@@ -122,9 +123,15 @@ void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
 }
 
 void DdsPublisher::wait_acknowledged(uint32_t timeout_ms) {
-  eprosima::fastrtps::Duration_t wait(static_cast<int32_t>(timeout_ms / 1000), (timeout_ms % 1000) * 1'000'000u);
-  for (auto* w : writers_)
-    if (w) w->wait_for_acknowledgments(wait);
+  // One deadline for all four writers, not one timeout each.
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  for (auto* w : writers_) {
+    if (!w) continue;
+    auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - std::chrono::steady_clock::now()).count();
+    if (left <= 0) break;
+    w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(static_cast<int32_t>(left / 1'000'000'000),
+                                                               static_cast<uint32_t>(left % 1'000'000'000)));
+  }
 }
 
 int DdsPublisher::matched_readers(TopicKind kind) const {
