@@ -90,6 +90,31 @@ TEST_F(Running, ARefusedWriteIsNoRemap) {
   EXPECT_EQ(bus.observer_sent.size(), reads_before);
 }
 
+TEST_F(Running, SegmentedAndBlockDownloadsCountToo) {
+  for (od::SdoClient::Mode mode : {od::SdoClient::Mode::Segmented, od::SdoClient::Mode::Block}) {
+    const size_t reads_before = bus.observer_sent.size();
+    std::vector<od::CanFrame> out;
+    // Making TPDO2 invalid is the first step of every remap.
+    bus.master->start_download(0x1801, 1, od::encode<uint32_t>(0xC0000285), mode, bus.now_us, out);
+    for (const od::CanFrame& f : out) bus.send(f);  // (the master's frames, in order)
+    bus.run_ms(5);
+    ASSERT_TRUE(bus.master->done());
+    ASSERT_TRUE(bus.master->result().ok());
+    bus.run_ms(400);
+    EXPECT_GT(bus.observer_sent.size(), reads_before) << static_cast<int>(mode);
+    write(0x1801, 1, 0x40000285);
+    bus.run_ms(400);
+  }
+}
+
+TEST_F(Running, AnotherMasterReadingTheMappingIsNoRemap) {
+  const size_t reads_before = bus.observer_sent.size();
+  bus.master_upload(0x1A01, 1);
+  ASSERT_TRUE(bus.master->result().ok());
+  bus.run_ms(500);
+  EXPECT_EQ(bus.observer_sent.size(), reads_before);
+}
+
 TEST_F(Running, BootUpReadsEverythingAgain) {
   node.set_status(0, 0x0180);
   bus.send(node.tpdo(0));
