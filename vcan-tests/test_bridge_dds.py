@@ -251,3 +251,22 @@ def test_stepbridge_bad_arguments_exit_2_with_one_line(stepbridge_bin, args, mes
     assert r.returncode == 2, r.stderr
     assert r.stderr.startswith("stepbridge: ") and r.stderr.count("\n") == 1, r.stderr
     assert message in r.stderr, r.stderr
+
+
+def test_two_nodes_with_three_axes_each_are_all_published(
+        master, start_node, start_bridge, stepwatch_bin, domain, tmp_path):
+    config = tmp_path / "three-axes.toml"
+    config.write_text('axes = 3\n[defaults]\n"1017" = 200\n')
+    start_bridge(domain)
+    for node in (NODE, NODE + 1):
+        start_node(node, ["--config", config])
+    master.nmt_start(0)  # all nodes
+
+    def all_six(lines):
+        nodes = [l for l in lines if l["type"] == "node" and l["state"] == "OPERATIONAL"]
+        axes = {(l["node"], l["axis"]) for l in lines if l["type"] == "axis" and l["status"]}
+        return len(nodes) == 2 and axes == {(n, a) for n in (NODE, NODE + 1) for a in (1, 2, 3)}
+
+    lines = wait_for_snapshot(stepwatch_bin, domain, all_six, timeout=15.0)
+    for node in (NODE, NODE + 1):
+        assert node_line(lines, node)["axes"] == 3, node_line(lines, node)
