@@ -37,7 +37,10 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                     .remote_reset = nullptr}),
       sync_(
           dictionary_, [this](const od::CanFrame& f) { send(f); },
-          [this](uint8_t counter, uint64_t now) { pdo_.on_sync(counter, now); },
+          [this](uint8_t counter, uint64_t now) {
+            pdo_.on_sync(counter, now);
+            if (on_sync) on_sync(now);
+          },
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
           }),

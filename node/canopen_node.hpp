@@ -55,6 +55,8 @@ class CanopenNode {
   // Brings the application up to `now_us`; called before every frame and tick, so a
   // command in a frame acts on an application that is current to the microsecond.
   std::function<void(uint64_t now_us)> on_advance;
+  // Every SYNC received (or produced here), after the synchronous PDOs (HP TRIG SYS).
+  std::function<void(uint64_t now_us)> on_sync;
 
  private:
   void install_service_hooks();

@@ -8,6 +8,7 @@
 
 #include "node/canopen_node.hpp"
 #include "node/config.hpp"
+#include "node/hp_service.hpp"
 #include "node/motion_service.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/socketcan.hpp"
@@ -38,8 +39,11 @@ int run(const node::NodeConfig& cfg) {
   node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
   node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults);
   node::MotionService motion(canopen.dictionary(), cfg.options.device, canopen.emcy());
-  canopen.on_advance = [&motion](uint64_t now) { motion.advance(now); };
-  canopen.on_reset_application = [&motion](uint64_t now) { motion.power_up(now); };
+  // The HP 44714A channels drive the same axes; their service advances both.
+  node::HpService hp(canopen.dictionary(), cfg.options.device, motion, canopen.emcy());
+  canopen.on_advance = [&hp](uint64_t now) { hp.advance(now); };
+  canopen.on_reset_application = [&hp](uint64_t now) { hp.power_up(now); };
+  canopen.on_sync = [&hp](uint64_t now) { hp.on_sync(now); };
   canopen.on_heartbeat_lost = [&motion](uint8_t, uint64_t now) { motion.master_lost(now); };
 
   canio::EventLoop loop;

@@ -30,6 +30,8 @@ class MotionService {
   motion::Axis& axis(unsigned n) { return *axes_.at(n); }
   sim::Machine& machine() { return machine_; }
   motion::Tick ticks(uint64_t now_us) const;
+  // The node clock's microsecond of a tick (the inverse of ticks(), rounded down).
+  uint64_t micros(motion::Tick t) const { return epoch_us_ + static_cast<uint64_t>(t) / 3072 * 625 + static_cast<uint64_t>(t) % 3072 * 625 / 3072; }
 
  private:
   void install_hooks();

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "od/axis_objects.hpp"
+#include "od/hp_objects.hpp"
 #include "od/can_frame.hpp"
 #include "od/pdo_mapping.hpp"
 
@@ -270,6 +271,7 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
   }
   add_user_objects(od);
   add_axis_objects(od, info);
+  add_hp_objects(od, info);
 }
 
 }  // namespace stepnode::od

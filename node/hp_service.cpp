@@ -1,0 +1,241 @@
+#include "node/hp_service.hpp"
+
+#include <cmath>
+
+#include "od/hp_objects.hpp"
+
+namespace stepnode::node {
+
+using namespace od::hp_obj;
+namespace hp = motion::hp;
+using od::SdoAbort;
+
+namespace {
+
+double real(std::span<const uint8_t> d) { return od::decode<double>(d); }
+uint8_t u8(std::span<const uint8_t> d) { return od::decode<uint8_t>(d); }
+
+}  // namespace
+
+HpService::HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, MotionService& motion,
+                     EmcyProducer& emcy)
+    : dictionary_(dictionary), motion_(motion), emcy_(emcy) {
+  for (unsigned a = 0; a < info.axes; ++a) {
+    channels_.push_back(std::make_unique<hp::Channel>(motion_.axis(a), motion_.machine().axes.at(a)));
+    hp::Channel& ch = *channels_.back();
+    ch.on_interrupt = [this, a](uint8_t event, motion::Tick) {
+      // Halts and limits also go out as EMCY (condition 3, 4, 5 -> 0xFF43..0xFF45).
+      uint8_t condition = 0;
+      for (uint8_t b = event; b; b >>= 1) ++condition;
+      if (condition >= 3)
+        emcy_.report(static_cast<uint16_t>(od::kHpInterruptEmcyBase + condition), error_bits::kManufacturer,
+                     {event, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
+    };
+    install_hooks(a);
+  }
+  // TRIG CHAN0: "triggering channels 1 and 2 off of channel 0" (3-27).
+  if (!channels_.empty())
+    channels_[0]->on_triggered = [this](motion::Tick at) {
+      for (size_t k = 1; k < channels_.size(); ++k) channels_[k]->chan0_triggered(at);
+    };
+}
+
+SdoAbort HpService::result(unsigned a, hp::Error e) {
+  if (e == hp::Error::None) return SdoAbort::None;
+  uint8_t n = static_cast<uint8_t>(e);
+  emcy_.report(static_cast<uint16_t>(od::kHpErrorEmcyBase + n), error_bits::kManufacturer,
+               {n, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
+  publish(a);
+  return SdoAbort::DeviceState;
+}
+
+void HpService::install_hooks(unsigned a) {
+  hp::Channel& ch = *channels_[a];
+  od::Dictionary& od = dictionary_;
+  auto hook = [&](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+    od.at(index(a, offset), sub).validate = [this, a, f](std::span<const uint8_t> d) {
+      SdoAbort r = f(d);
+      publish(a);
+      return r;
+    };
+  };
+  // PROFILE: subs 1-5 are staged; writing 1 to sub 6 gives the PROFILE command.
+  hook(kProfile, od::hp_profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
+    if (u8(d) != 1) return SdoAbort::None;
+    uint16_t p = index(a, kProfile);
+    hp::Profile prof{static_cast<hp::ProfileMode>(dictionary_.get<uint8_t>(p, od::hp_profile_sub::kMode)),
+                     dictionary_.get<double>(p, od::hp_profile_sub::kMin), dictionary_.get<double>(p, od::hp_profile_sub::kMax),
+                     dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
+                     dictionary_.get<double>(p, od::hp_profile_sub::kLast)};
+    hp::Error e = hp::Error::None;
+    hp::Conflict c = ch.profile(prof, now(), &e);
+    if (e != hp::Error::None) return result(a, e);
+    return c == hp::Conflict::None ? SdoAbort::None : SdoAbort::ParameterIncompatible;
+  });
+  hook(kPscale, 0, [this, a, &ch](std::span<const uint8_t> d) {
+    double s = real(d);
+    if (s == 0 || !std::isfinite(s)) return SdoAbort::InvalidValue;
+    return result(a, ch.pscale(s));
+  });
+  auto nowait = [this, a] { return dictionary_.get<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait) != 0; };
+  hook(kMove, od::hp_move_sub::kRelative, [this, a, &ch, nowait](std::span<const uint8_t> d) {
+    return std::isfinite(real(d)) ? result(a, ch.move(real(d), false, nowait(), now())) : SdoAbort::InvalidValue;
+  });
+  hook(kMove, od::hp_move_sub::kAbsolute, [this, a, &ch, nowait](std::span<const uint8_t> d) {
+    return std::isfinite(real(d)) ? result(a, ch.move(real(d), true, nowait(), now())) : SdoAbort::InvalidValue;
+  });
+  hook(kSustain, 0, [this, a, &ch, nowait](std::span<const uint8_t> d) {
+    return std::isfinite(real(d)) ? result(a, ch.sustain(real(d), nowait(), now())) : SdoAbort::InvalidValue;
+  });
+  hook(kTrig, 0, [this, a, &ch](std::span<const uint8_t> d) {
+    return result(a, ch.trig(static_cast<hp::TrigMode>(u8(d)), now()));
+  });
+  od.at(index(a, kTrig), 0).on_read = [&ch](od::Bytes& v) { v = od::encode<uint8_t>(static_cast<uint8_t>(ch.trig_mode())); };
+  hook(kDelay, 0, [&ch](std::span<const uint8_t> d) {
+    ch.delay(od::decode<uint16_t>(d));
+    return SdoAbort::None;
+  });
+  uint16_t out = index(a, kOutput);
+  auto standby = [this, a, &ch, out](uint8_t mode, uint8_t sense) {
+    return result(a, ch.standby(static_cast<hp::StandbyMode>(mode), sense != 0, now()));
+  };
+  hook(kOutput, od::hp_output_sub::kStandbyMode, [this, out, standby](std::span<const uint8_t> d) {
+    return standby(u8(d), dictionary_.get<uint8_t>(out, od::hp_output_sub::kStandbySense));
+  });
+  hook(kOutput, od::hp_output_sub::kStandbySense, [this, out, standby](std::span<const uint8_t> d) {
+    return standby(dictionary_.get<uint8_t>(out, od::hp_output_sub::kStandbyMode), u8(d));
+  });
+  for (uint8_t sub : {od::hp_output_sub::kPulseMode, od::hp_output_sub::kPstpSense, od::hp_output_sub::kNdirSense})
+    hook(kOutput, sub, [this, out, sub, &ch](std::span<const uint8_t> d) {
+      auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(out, s); };
+      ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(od::hp_output_sub::kPulseMode)),
+                              get(od::hp_output_sub::kPstpSense) != 0, get(od::hp_output_sub::kNdirSense) != 0});
+      return SdoAbort::None;
+    });
+  uint16_t lim = index(a, kLimits);
+  for (uint8_t sub : {od::hp_limits_sub::kPlimSense, od::hp_limits_sub::kNlimSense})
+    hook(kLimits, sub, [this, lim, sub, &ch](std::span<const uint8_t> d) {
+      auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(lim, s); };
+      ch.hardlim(get(od::hp_limits_sub::kPlimSense) != 0, get(od::hp_limits_sub::kNlimSense) != 0);
+      return SdoAbort::None;
+    });
+  hook(kLimits, od::hp_limits_sub::kHaltMode, [this, &ch](std::span<const uint8_t> d) {
+    ch.halt_mode(static_cast<hp::HaltMode>(u8(d)), now());
+    return SdoAbort::None;
+  });
+  hook(kLimits, od::hp_limits_sub::kHaltSgl, [this, &ch](std::span<const uint8_t> d) {
+    if (u8(d)) ch.halt_sgl(now());
+    return SdoAbort::None;
+  });
+  hook(kPosition, 0, [this, a, &ch](std::span<const uint8_t> d) {
+    return std::isfinite(real(d)) ? result(a, ch.pos(real(d))) : SdoAbort::InvalidValue;
+  });
+  od.at(index(a, kPosition), 0).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.pos_query()); };
+  uint16_t q = index(a, kQuadrature);
+  hook(kQuadrature, od::hp_quad_sub::kQscale, [&ch](std::span<const uint8_t> d) {
+    if (!std::isfinite(real(d))) return SdoAbort::InvalidValue;
+    ch.qscale(real(d));
+    return SdoAbort::None;
+  });
+  hook(kQuadrature, od::hp_quad_sub::kQindex, [&ch](std::span<const uint8_t> d) {
+    ch.qindex(static_cast<hp::QIndexMode>(u8(d)));
+    return SdoAbort::None;
+  });
+  od.at(q, od::hp_quad_sub::kQindex).on_read = [&ch](od::Bytes& v) {
+    v = od::encode<uint8_t>(static_cast<uint8_t>(ch.qindex_mode()));
+  };
+  od.at(q, od::hp_quad_sub::kQpos).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.qpos_query()); };
+  hook(kInterrupt, od::hp_intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
+    if (u8(d)) ch.enable_intr();
+    else ch.disable_intr();
+    return SdoAbort::None;
+  });
+  od.at(index(a, kInterrupt), od::hp_intr_sub::kEnable).on_read = [&ch](od::Bytes& v) {
+    v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);
+  };
+  uint16_t sim = sim_index(a);
+  od.at(sim, od::hp_sim_sub::kHaltInputHigh).validate = [this, a, &ch](std::span<const uint8_t> d) {
+    ch.set_halt_input(u8(d) != 0, now());
+    publish(a);
+    return SdoAbort::None;
+  };
+  od.at(sim, od::hp_sim_sub::kTestJumper).validate = [&ch](std::span<const uint8_t> d) {
+    ch.set_test_jumper(u8(d) != 0);
+    return SdoAbort::None;
+  };
+}
+
+void HpService::apply_stored(unsigned a, motion::Tick t) {
+  hp::Channel& ch = *channels_[a];
+  uint16_t p = index(a, kProfile), out = index(a, kOutput), lim = index(a, kLimits);
+  auto g8 = [&](uint16_t i, uint8_t s) { return dictionary_.get<uint8_t>(i, s); };
+  // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3); one that
+  // conflicts leaves the power-on profile.
+  ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, od::hp_profile_sub::kMode)),
+                         dictionary_.get<double>(p, od::hp_profile_sub::kMin), dictionary_.get<double>(p, od::hp_profile_sub::kMax),
+                         dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
+                         dictionary_.get<double>(p, od::hp_profile_sub::kLast)},
+             t);
+  double s = dictionary_.get<double>(index(a, kPscale), 0);
+  if (s != 0 && std::isfinite(s)) ch.pscale(s);
+  ch.delay(dictionary_.get<uint16_t>(index(a, kDelay), 0));
+  ch.standby(static_cast<hp::StandbyMode>(g8(out, od::hp_output_sub::kStandbyMode)),
+             g8(out, od::hp_output_sub::kStandbySense) != 0, t);
+  ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(g8(out, od::hp_output_sub::kPulseMode)),
+                          g8(out, od::hp_output_sub::kPstpSense) != 0, g8(out, od::hp_output_sub::kNdirSense) != 0});
+  ch.hardlim(g8(lim, od::hp_limits_sub::kPlimSense) != 0, g8(lim, od::hp_limits_sub::kNlimSense) != 0);
+  ch.halt_mode(static_cast<hp::HaltMode>(g8(lim, od::hp_limits_sub::kHaltMode)), t);
+  ch.qscale(dictionary_.get<double>(index(a, kQuadrature), od::hp_quad_sub::kQscale));
+  ch.set_halt_input(g8(sim_index(a), od::hp_sim_sub::kHaltInputHigh) != 0, t);
+  ch.set_test_jumper(g8(sim_index(a), od::hp_sim_sub::kTestJumper) != 0);
+}
+
+void HpService::publish(unsigned a) {
+  const hp::Channel& ch = *channels_[a];
+  od::Dictionary& od = dictionary_;
+  od.put<int8_t>(index(a, kDone), 0, static_cast<int8_t>(ch.done()));
+  od.put<uint8_t>(index(a, kError), 0, static_cast<uint8_t>(ch.last_error()));
+  od.put<uint8_t>(index(a, kConflict), 0, static_cast<uint8_t>(ch.last_conflict()));
+  od.put<uint8_t>(index(a, kInterrupt), od::hp_intr_sub::kEvents, ch.interrupt_events());
+  uint16_t out = index(a, kOutput);
+  od.put<uint8_t>(out, od::hp_output_sub::kStbyLevel, ch.stby_output_high() ? 1 : 0);
+  od.put<uint8_t>(out, od::hp_output_sub::kMotorPowered, ch.motor_powered() ? 1 : 0);
+  od.put<uint32_t>(out, od::hp_output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
+  od.put<uint32_t>(out, od::hp_output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
+  od.put<double>(index(a, kPosition), 0, ch.pos_query());
+  od.put<int32_t>(index(a, kQuadrature), od::hp_quad_sub::kCount, ch.quadrature_count());
+  uint16_t t = index(a, kTiming);
+  if (auto trig = ch.trigger_time()) {
+    od.put<uint32_t>(t, od::hp_timing_sub::kTriggerUs, static_cast<uint32_t>(motion_.micros(*trig)));
+    auto first = ch.first_step_time();
+    od.put<uint32_t>(t, od::hp_timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(motion_.micros(*first)) : 0);
+    od.put<int32_t>(t, od::hp_timing_sub::kFirstStepAfterTriggerUs,
+                    first ? static_cast<int32_t>(motion_.micros(*first) - motion_.micros(*trig)) : -1);
+  }
+}
+
+void HpService::advance(uint64_t now_us) {
+  now_us_ = now_us;
+  motion_.advance(now_us);  // the clock's epoch, and every axis to now
+  for (auto& ch : channels_) ch->advance(now());
+  motion_.advance(now_us);  // publishes what the channels started or stopped
+  for (unsigned a = 0; a < channels_.size(); ++a) publish(a);
+}
+
+void HpService::power_up(uint64_t now_us) {
+  now_us_ = now_us;
+  motion_.power_up(now_us);
+  for (unsigned a = 0; a < channels_.size(); ++a) {
+    channels_[a]->power_up(now());
+    apply_stored(a, now());
+    publish(a);
+  }
+}
+
+void HpService::on_sync(uint64_t now_us) {
+  advance(now_us);
+  for (auto& ch : channels_) ch->sync(now());
+  advance(now_us);
+}
+
+}  // namespace stepnode::node

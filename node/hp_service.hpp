@@ -1,0 +1,48 @@
+// Connects the HP 44714A channels (node/motion/hp_channel.*) to their objects
+// (od/hp_objects.*): a write is the manual's command, acted on at once; a refused command
+// is answered with an SDO abort (settings conflict 0x06040043, HP error 0x08000022), its
+// number stays in 0x2n19 / 0x2n1A and an error number also goes out as EMCY 0xFF00 + n.
+// DONE?, the error number and the interrupt event word are published after every advance
+// (TPDO 4n+4 carries them); a SYNC is TRIG SYS; channel 0's trigger is TRIG CHAN0's.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "node/emcy.hpp"
+#include "node/motion/hp_channel.hpp"
+#include "node/motion_service.hpp"
+#include "od/device_dictionary.hpp"
+#include "od/dictionary.hpp"
+
+namespace stepnode::node {
+
+class HpService {
+ public:
+  HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, MotionService& motion, EmcyProducer& emcy);
+
+  // Brings the axes and channels to `now_us` and publishes both (use instead of
+  // MotionService::advance).
+  void advance(uint64_t now_us);
+  // Power-up / NMT reset node: the axes, then the channels' power-on state and stored settings.
+  void power_up(uint64_t now_us);
+  // A SYNC was received (or produced): TRIG SYS.
+  void on_sync(uint64_t now_us);
+
+  motion::hp::Channel& channel(unsigned a) { return *channels_.at(a); }
+
+ private:
+  void install_hooks(unsigned a);
+  void apply_stored(unsigned a, motion::Tick now);
+  void publish(unsigned a);
+  od::SdoAbort result(unsigned a, motion::hp::Error e);
+  motion::Tick now() const { return motion_.ticks(now_us_); }
+
+  od::Dictionary& dictionary_;
+  MotionService& motion_;
+  EmcyProducer& emcy_;
+  std::vector<std::unique_ptr<motion::hp::Channel>> channels_;
+  uint64_t now_us_ = 0;
+};
+
+}  // namespace stepnode::node
