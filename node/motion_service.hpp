@@ -30,8 +30,11 @@ class MotionService {
   motion::Axis& axis(unsigned n) { return *axes_.at(n); }
   sim::Machine& machine() { return machine_; }
   motion::Tick ticks(uint64_t now_us) const;
-  // The node clock's microsecond of a tick (the inverse of ticks(), rounded down).
-  uint64_t micros(motion::Tick t) const { return epoch_us_ + static_cast<uint64_t>(t) / 3072 * 625 + static_cast<uint64_t>(t) % 3072 * 625 / 3072; }
+  // The node clock's microsecond of a tick, to the nearest (so micros(ticks(us)) == us).
+  uint64_t micros(motion::Tick t) const {
+    uint64_t u = static_cast<uint64_t>(t);
+    return epoch_us_ + u / 3072 * 625 + (u % 3072 * 625 + 1536) / 3072;
+  }
 
  private:
   void install_hooks();

@@ -1,0 +1,333 @@
+// The HP 44714A manual's example programs replayed through the bus objects of a node in
+// virtual time (every command an SDO write, every query an SDO read, the interrupt as TPDO
+// 4 and EMCY): Figure 3-3 "Sending Pulses To a Motor", the interrupt example (3-16), the
+// PSCALE round-off examples (3-10), the PROFILE conflicts and error numbers as aborts, and
+// TRIG SYS on a SYNC frame.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "node/hp_service.hpp"
+#include "node/motion_service.hpp"
+#include "node/tests/node_harness.hpp"
+#include "od/hp_objects.hpp"
+#include "od/sdo_client.hpp"
+
+namespace stepnode::node::test {
+namespace {
+
+using namespace od::hp_obj;
+
+class HpBus : public NodeHarness {
+ protected:
+  void SetUp() override { build(1); }
+  void build(unsigned axes) {
+    hp.reset();
+    motion.reset();
+    make(axes);
+    od::DeviceInfo info;
+    info.node_id = kId;
+    info.axes = axes;
+    motion = std::make_unique<MotionService>(od(), info, node->emcy());
+    hp = std::make_unique<HpService>(od(), info, *motion, node->emcy());
+    node->on_advance = [this](uint64_t now) { hp->advance(now); };
+    node->on_reset_application = [this](uint64_t now) { hp->power_up(now); };
+    node->on_sync = [this](uint64_t now) { hp->on_sync(now); };
+    hp->power_up(t);
+    nmt(0x01);  // operational: TPDOs go out
+  }
+
+  // One SDO transfer through the od client (REAL64 values need segmented transfers).
+  od::SdoResult transfer(bool download, uint16_t index, uint8_t sub, od::Bytes data = {}) {
+    od::SdoClient client(kSdoRx, kSdoTx);
+    std::vector<CanFrame> out;
+    if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
+    else client.start_upload(index, sub, od::SdoClient::Mode::Auto, t, out);
+    for (int guard = 0; guard < 64 && !client.done(); ++guard) {
+      std::vector<CanFrame> requests;
+      requests.swap(out);
+      for (const CanFrame& f : requests) {
+        size_t before = sent.size();
+        frame(f);
+        for (size_t i = before; i < sent.size(); ++i) client.on_frame(sent[i], t, out);
+      }
+    }
+    EXPECT_TRUE(client.done());
+    return client.result();
+  }
+  uint32_t put(uint16_t index, uint8_t sub, double v) {
+    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<double>(v)).abort);
+  }
+  template <class T>
+  uint32_t put_int(uint16_t index, uint8_t sub, T v) {
+    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<T>(v)).abort);
+  }
+  double get(uint16_t index, uint8_t sub = 0) {
+    od::SdoResult r = transfer(false, index, sub);
+    EXPECT_TRUE(r.ok());
+    return od::decode<double>(r.data);
+  }
+  int done(unsigned a = 0) { return static_cast<int8_t>(*sdo_read(index(a, kDone), 0)); }
+  int error(unsigned a = 0) { return static_cast<int>(*sdo_read(index(a, kError), 0)); }
+  int32_t mechanical(unsigned a = 0) {
+    return static_cast<int32_t>(*sdo_read(static_cast<uint16_t>(0x5003 + 0x100 * a), 0));
+  }
+
+  // The manual's words as object writes.
+  uint32_t profile(uint8_t mode, double min, double max, double slope, double last, unsigned a = 0) {
+    uint16_t p = index(a, kProfile);
+    EXPECT_EQ(put_int<uint8_t>(p, od::hp_profile_sub::kMode, mode), 0u);
+    EXPECT_EQ(put(p, od::hp_profile_sub::kMin, min), 0u);
+    EXPECT_EQ(put(p, od::hp_profile_sub::kMax, max), 0u);
+    EXPECT_EQ(put(p, od::hp_profile_sub::kSlope, slope), 0u);
+    EXPECT_EQ(put(p, od::hp_profile_sub::kLast, last), 0u);
+    return put_int<uint8_t>(p, od::hp_profile_sub::kApply, 1);
+  }
+  uint32_t move(double d, bool abs = false, bool nowait = false, unsigned a = 0) {
+    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait, nowait ? 1 : 0), 0u);
+    return put(index(a, kMove), abs ? od::hp_move_sub::kAbsolute : od::hp_move_sub::kRelative, d);
+  }
+  uint32_t sustain(double v, bool nowait = false, unsigned a = 0) {
+    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait, nowait ? 1 : 0), 0u);
+    return put(index(a, kSustain), 0, v);
+  }
+  uint32_t trig(uint8_t mode, unsigned a = 0) { return sdo_write(index(a, kTrig), 0, mode, 1); }
+  // HP-IB "WAIT n" / the operator's PAUSE: virtual time passes.
+  void wait_s(double s) { advance_us(static_cast<uint64_t>(s * 1e6)); }
+
+  std::unique_ptr<MotionService> motion;
+  std::unique_ptr<HpService> hp;
+};
+
+constexpr uint32_t kDeviceState = 0x08000022, kIncompatible = 0x06040043;
+constexpr uint32_t kTpdo4 = 0x480 + 5;
+
+TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
+  // 30 STANDBY AUTO LO / 40 PULSE SS HI HI / 50 PROFILE FREQ 100 800 200 25E-6 / 60 PSCALE 0.1
+  uint16_t out = index(0, kOutput);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 2, 1), 0u);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbySense, 0, 1), 0u);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kPulseMode, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kPstpSense, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kNdirSense, 1, 1), 0u);
+  ASSERT_EQ(profile(0, 100, 800, 200, 25e-6), 0u);
+  ASSERT_EQ(put(index(0, kPscale), 0, 0.1), 0u);
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 0u);  // LO sense: low = power removed
+
+  // 70 MOVE 20 (auto triggered): 200 pulses; 90 MOVE -30: 300 pulses back.
+  ASSERT_EQ(move(20), 0u);
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 1u);  // motor power on
+  wait_s(3);
+  EXPECT_EQ(done(), 0);
+  EXPECT_EQ(mechanical(), 200);
+  EXPECT_NEAR(get(index(0, kPosition)), 20.0, 1e-9);
+  ASSERT_EQ(move(-30), 0u);
+  wait_s(4);
+  EXPECT_EQ(mechanical(), -100);
+  EXPECT_NEAR(get(index(0, kPosition)), -10.0, 1e-9);
+  // SS mode: the negative pulses went to NDIR.
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kPstpPulses), 200u);
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kNdirPulses), 300u);
+
+  // 70 DELAY 5 / 80 TRIG HOLD / 90 MOVE 20 NOWAIT / 100 TRIG
+  ASSERT_EQ(sdo_write(index(0, kDelay), 0, 5000, 2), 0u);
+  ASSERT_EQ(trig(0), 0u);
+  ASSERT_EQ(move(20, false, true), 0u);
+  wait_s(1);
+  EXPECT_EQ(done(), -3);
+  EXPECT_EQ(mechanical(), -100);
+  ASSERT_EQ(trig(2), 0u);
+  EXPECT_EQ(*sdo_read(index(0, kTrig), 0), 0u);  // back to HOLD
+  wait_s(4.9);
+  EXPECT_EQ(done(), -2);  // the delay runs
+  EXPECT_EQ(mechanical(), -100);
+  wait_s(3);
+  EXPECT_EQ(mechanical(), 100);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(index(0, kTiming), od::hp_timing_sub::kFirstStepAfterTriggerUs)) / 1000,
+            5000 + 10 - 1);  // DELAY 5 s, then the first pulse at 100 Hz rising (just under 10 ms)
+  // 120 MOVE -30 NOWAIT / 130 TRIG / 150 TRIG AUTO
+  ASSERT_EQ(move(-30, false, true), 0u);
+  ASSERT_EQ(trig(2), 0u);
+  wait_s(9);
+  EXPECT_EQ(mechanical(), -200);
+  EXPECT_NEAR(get(index(0, kPosition)), -20.0, 1e-9);
+  ASSERT_EQ(trig(1), 0u);
+
+  // 160 SUSTAIN 10 (10 units/s = 100 pulses/s, the minimum; the 5 s DELAY still applies).
+  ASSERT_EQ(sustain(10, true), 0u);
+  wait_s(10);
+  EXPECT_EQ(done(), -1);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2007, 0)), 100);
+  int32_t p = mechanical();
+  EXPECT_NEAR(p - (-200), 500, 2);  // 5 s of delay, 5 s at 100 Hz
+  // 180 SUSTAIN 50: 500 pulses/s after the delay and a 2 s ramp.
+  ASSERT_EQ(sustain(50, true), 0u);
+  wait_s(10);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2007, 0)), 500);
+  // Reversing now is error 91 (3-3), answered with an abort and an EMCY.
+  size_t before = sent.size();
+  EXPECT_EQ(sustain(-10, true), kDeviceState);
+  EXPECT_EQ(error(), 91);
+  ASSERT_EQ(emcys(before).size(), 1u);
+  EXPECT_EQ(emcy_code(emcys(before)[0]), 0xFF5B);
+  // 200 SUSTAIN 0 "Stop to change direction" / 220 SUSTAIN -10 "Reverse direction"
+  ASSERT_EQ(sustain(0, true), 0u);
+  wait_s(10);
+  EXPECT_EQ(done(), 0);
+  ASSERT_EQ(sustain(-10, true), 0u);
+  wait_s(10);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2007, 0)), -100);
+  // 240 HALT SGL
+  ASSERT_EQ(sdo_write(index(0, kLimits), od::hp_limits_sub::kHaltSgl, 1, 1), 0u);
+  EXPECT_EQ(done(), 1);
+  int32_t stopped = mechanical();
+  wait_s(2);
+  EXPECT_EQ(mechanical(), stopped);
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 0u);  // AUTO: power off 1 s later
+}
+
+TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
+  // PROFILE FREQ 0 1200 250 50E-6 / ENABLE INTR / MOVE 100 / WAIT 5 / SUSTAIN 1000 / WAIT 10
+  // / HALT SGL; the service routine re-enables (the master writes 0x201D:1 again).
+  ASSERT_EQ(profile(0, 0, 1200, 250, 50e-6), 0u);
+  uint16_t in = index(0, kInterrupt);
+  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  size_t from = sent.size();
+  ASSERT_EQ(move(100, false, true), 0u);
+  wait_s(5);
+  auto tpdos = with_id(kTpdo4, from);
+  ASSERT_FALSE(tpdos.empty());
+  EXPECT_EQ(tpdos.back().dlc, 3);
+  EXPECT_EQ(tpdos.back().data[0], 0);  // DONE? 0
+  EXPECT_EQ(tpdos.back().data[2], 1);  // event: pulses stopped after a MOVE
+  EXPECT_EQ(*sdo_read(in, od::hp_intr_sub::kEnable), 0u);  // disabled once sent
+  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  from = sent.size();
+  uint64_t sustain_at = t;
+  ASSERT_EQ(sustain(1000, true), 0u);
+  wait_s(10);
+  tpdos = with_id(kTpdo4, from);
+  auto times = times_of(kTpdo4, from);
+  bool reached = false;
+  for (size_t i = 0; i < tpdos.size(); ++i)
+    if (tpdos[i].data[2] == 2) {
+      reached = true;
+      EXPECT_EQ(static_cast<int8_t>(tpdos[i].data[0]), -1);  // SUSTAIN running
+      EXPECT_NEAR(static_cast<double>(times[i] - sustain_at) / 1e6, 4.0, 0.01);  // 1000 Hz / 250 Hz/s
+    }
+  EXPECT_TRUE(reached);
+  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  from = sent.size();
+  ASSERT_EQ(sdo_write(index(0, kLimits), od::hp_limits_sub::kHaltSgl, 1, 1), 0u);
+  tpdos = with_id(kTpdo4, from);
+  ASSERT_FALSE(tpdos.empty());
+  EXPECT_EQ(tpdos.back().data[0], 1);
+  EXPECT_EQ(tpdos.back().data[2], 8);  // HALT SGL
+  auto e = emcys(from);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(emcy_code(e[0]), 0xFF44);
+}
+
+TEST_F(HpBus, PscaleRoundOffExamplesRelAndAbs) {
+  ASSERT_EQ(put(index(0, kPosition), 0, 0), 0u);  // POS 0
+  ASSERT_EQ(put(index(0, kPscale), 0, 2), 0u);     // PSCALE 2
+  for (double expected : {2.0, 4.0, 6.0}) {
+    ASSERT_EQ(move(1), 0u);  // MOVE 1 REL
+    wait_s(1);
+    EXPECT_EQ(get(index(0, kPosition)), expected);
+  }
+  ASSERT_EQ(put(index(0, kPosition), 0, 0), 0u);
+  for (auto [target, expected] : {std::pair{1.0, 2.0}, {2.0, 2.0}, {3.0, 4.0}}) {
+    ASSERT_EQ(move(target, true), 0u);  // MOVE n ABS
+    wait_s(1);
+    EXPECT_EQ(get(index(0, kPosition)), expected);
+  }
+}
+
+TEST_F(HpBus, ProfileConflictsAndErrorNumbersAreAborts) {
+  EXPECT_EQ(profile(0, 500, 100, 200, 2e-3), kIncompatible);
+  EXPECT_EQ(*sdo_read(index(0, kConflict), 0), 5u);
+  EXPECT_EQ(profile(0, 0, 1000, 500, 2e-3), kIncompatible);
+  EXPECT_EQ(*sdo_read(index(0, kConflict), 0), 4u);
+  // 92: MOVE in WIDTH mode.
+  ASSERT_EQ(profile(1, 1e-3, 10e-3, 5e-3, 20e-3), 0u);
+  EXPECT_EQ(move(10), kDeviceState);
+  EXPECT_EQ(error(), 92);
+  ASSERT_EQ(profile(0, 0, 250, 500, 50e-6), 0u);
+  // 94: STANDBY ON.
+  size_t from = sent.size();
+  ASSERT_EQ(sdo_write(index(0, kOutput), od::hp_output_sub::kStandbyMode, 1, 1), 0u);
+  EXPECT_EQ(move(10), kDeviceState);
+  EXPECT_EQ(error(), 94);
+  ASSERT_EQ(emcys(from).size(), 1u);
+  EXPECT_EQ(emcy_code(emcys(from)[0]), 0xFF5E);
+  ASSERT_EQ(sdo_write(index(0, kOutput), od::hp_output_sub::kStandbyMode, 2, 1), 0u);
+  // 93: the simulated TEST jumper.
+  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kTestJumper, 1, 1), 0u);
+  EXPECT_EQ(move(10), kDeviceState);
+  EXPECT_EQ(error(), 93);
+  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kTestJumper, 0, 1), 0u);
+  // 90: TRIG SGL with nothing armed. 89: a MOVE while one runs.
+  ASSERT_EQ(trig(0), 0u);
+  EXPECT_EQ(trig(2), kDeviceState);
+  EXPECT_EQ(error(), 90);
+  ASSERT_EQ(trig(1), 0u);
+  ASSERT_EQ(move(500, false, true), 0u);
+  EXPECT_EQ(error(), 0);
+  EXPECT_EQ(move(5, false, true), kDeviceState);
+  EXPECT_EQ(error(), 89);
+}
+
+TEST_F(HpBus, HaltSwitchAndHardLimitOverTheBus) {
+  ASSERT_EQ(sdo_write(index(0, kInterrupt), od::hp_intr_sub::kEnable, 1, 1), 0u);
+  ASSERT_EQ(sustain(200, true), 0u);
+  wait_s(1);
+  ASSERT_EQ(sdo_write(index(0, kInterrupt), od::hp_intr_sub::kEnable, 1, 1), 0u);
+  size_t from = sent.size();
+  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kHaltInputHigh, 0, 1), 0u);  // switch closes
+  EXPECT_EQ(done(), 1);
+  ASSERT_EQ(emcys(from).size(), 1u);
+  EXPECT_EQ(emcy_code(emcys(from)[0]), 0xFF45);
+  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kHaltInputHigh, 1, 1), 0u);
+  // The simulated upper limit (0x5000:6) at 300 steps.
+  ASSERT_EQ(sdo_write(0x5000, 6, 300), 0u);
+  ASSERT_EQ(move(1000, false, true), 0u);
+  wait_s(5);
+  EXPECT_EQ(done(), 2);
+  EXPECT_EQ(mechanical(), 300);
+}
+
+TEST_F(HpBus, TrigSysStartsTwoAxesOnOneSync) {
+  build(2);
+  for (unsigned a = 0; a < 2; ++a) {
+    ASSERT_EQ(trig(3, a), 0u);
+    ASSERT_EQ(move(50, false, true, a), 0u);
+    EXPECT_EQ(done(a), -3);
+  }
+  advance_us(2'345);
+  t += 123;  // the SYNC arrives between ticks
+  sync();
+  uint64_t sync_at = t;
+  wait_s(2);
+  uint32_t first[2];
+  for (unsigned a = 0; a < 2; ++a) {
+    EXPECT_EQ(done(a), 0);
+    EXPECT_EQ(mechanical(a), 50);
+    first[a] = *sdo_read(index(a, kTiming), od::hp_timing_sub::kFirstStepUs);
+    EXPECT_EQ(*sdo_read(index(a, kTiming), od::hp_timing_sub::kTriggerUs), static_cast<uint32_t>(sync_at));
+  }
+  EXPECT_EQ(first[0], first[1]);
+  // The power-on profile starts from 0 Hz at 500 Hz/s: the first step 63.2 ms after SYNC.
+  EXPECT_NEAR(static_cast<double>(first[0] - static_cast<uint32_t>(sync_at)) / 1000, 63.2, 0.2);
+}
+
+TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
+  EXPECT_EQ(*sdo_read(0x1A03, 0), 3u);
+  EXPECT_EQ(*sdo_read(0x1A03, 1), 0x20180008u);
+  EXPECT_EQ(*sdo_read(0x1A03, 2), 0x20190008u);
+  EXPECT_EQ(*sdo_read(0x1A03, 3), 0x201D0208u);
+}
+
+}  // namespace
+}  // namespace stepnode::node::test
