@@ -13,6 +13,7 @@
 #include "tools/stepctl/object_catalog.hpp"
 #include "tools/stepctl/watch.hpp"
 #include "tools/stepctl/axis_commands.hpp"
+#include "tools/stepctl/hp_command.hpp"
 
 using namespace stepnode;
 using namespace stepnode::tools;
@@ -198,6 +199,16 @@ int main(int argc, char** argv) {
   add_axis_command("estop", "axis: Immediate Stop (%Q16)");
   add_axis_command("status", "axis: status bits in words, motor and encoder position");
 
+  // HP 44714A words: stepctl hp "PROFILE FREQ 100 800 200 25E-6; MOVE 20" --node 5 --axis 0
+  std::string hp_words;
+  int hp_channel = 0, hp_wait_s = 120;
+  auto* hp = app.add_subcommand("hp", "HP 44714A commands in the manual's words, ';' between commands; "
+                                      "queries (POS?, DONE?, QPOS?, ERR?) print the answer");
+  hp->add_option("words", hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"")->required();
+  hp->add_option("--node", node, "node id 1..127")->required()->check(CLI::Range(1, 127));
+  hp->add_option("--axis", hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
+  hp->add_option("--wait", hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -214,6 +225,7 @@ int main(int argc, char** argv) {
     if (*read) return cmd_read(bus, catalog, node, object, block, output);
     if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
     if (*dump) return cmd_dump(bus, catalog, node);
+    if (*hp) return run_hp_command(bus, node, static_cast<unsigned>(hp_channel), hp_words, hp_wait_s);
     for (const char* verb : {"clear", "home", "move", "jog", "stop", "estop", "status"}) {
       if (!*app.get_subcommand(verb)) continue;
       std::vector<std::string> words{verb};

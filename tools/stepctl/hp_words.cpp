@@ -1,0 +1,228 @@
+#include "tools/stepctl/hp_words.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+#include "od/hp_objects.hpp"
+
+namespace stepnode::tools {
+namespace {
+
+using namespace od::hp_obj;
+
+std::string upper(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return s;
+}
+
+std::vector<std::string> split_words(const std::string& s) {
+  std::vector<std::string> out;
+  std::string w;
+  for (char c : s) {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == ',') {
+      if (!w.empty()) out.push_back(upper(w));
+      w.clear();
+    } else {
+      w += c;
+    }
+  }
+  if (!w.empty()) out.push_back(upper(w));
+  return out;
+}
+
+double number(const std::string& command, const std::string& w) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(w, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != w.size() || !std::isfinite(v))
+    throw std::invalid_argument(command + ": '" + w + "' is not a number");
+  return v;
+}
+
+// HI/LH = 1, LO/HL = 0 (PULSE, HARDLIM, STANDBY senses).
+uint8_t sense(const std::string& command, const std::string& w) {
+  if (w == "HI" || w == "LH") return 1;
+  if (w == "LO" || w == "HL") return 0;
+  throw std::invalid_argument(command + ": sense '" + w + "' must be HI, LO, LH or HL");
+}
+
+struct Planner {
+  unsigned ch;
+  std::vector<HpAccess> out;
+
+  uint16_t at(uint16_t offset) const { return index(ch, offset); }
+  void write(uint16_t offset, uint8_t sub, od::Bytes data) { out.push_back({HpAccess::Write, at(offset), sub, std::move(data), {}, {}}); }
+  void u8(uint16_t offset, uint8_t sub, uint8_t v) { write(offset, sub, od::encode<uint8_t>(v)); }
+  void real(uint16_t offset, uint8_t sub, double v) { write(offset, sub, od::encode<double>(v)); }
+  void read(uint16_t offset, uint8_t sub, od::DataType type, std::string label) {
+    out.push_back({HpAccess::Read, at(offset), sub, {}, type, std::move(label)});
+  }
+  void wait_running() { out.push_back({HpAccess::WaitWhileRunning, at(kDone), 0, {}, od::DataType::Integer8, "DONE?"}); }
+
+  void command(const std::vector<std::string>& w) {
+    const std::string& c = w[0];
+    auto need = [&](size_t lo, size_t hi) {
+      if (w.size() - 1 < lo || w.size() - 1 > hi)
+        throw std::invalid_argument(c + ": takes " + std::to_string(lo) + (lo == hi ? "" : ".." + std::to_string(hi)) +
+                                    " parameters, got " + std::to_string(w.size() - 1));
+    };
+    if (std::find(w.begin(), w.end(), "USE") != w.end())
+      throw std::invalid_argument(c + ": USE ch is given with --axis (channel 0 = axis 1)");
+    if (c == "PROFILE") {
+      need(5, 5);
+      if (w[1] != "FREQ" && w[1] != "WIDTH") throw std::invalid_argument("PROFILE: mode must be FREQ or WIDTH");
+      u8(kProfile, od::hp_profile_sub::kMode, w[1] == "WIDTH" ? 1 : 0);
+      for (uint8_t k = 0; k < 4; ++k) real(kProfile, static_cast<uint8_t>(od::hp_profile_sub::kMin + k), number(c, w[2 + k]));
+      u8(kProfile, od::hp_profile_sub::kApply, 1);
+    } else if (c == "PSCALE") {
+      need(1, 1);
+      double s = number(c, w[1]);
+      if (s == 0) throw std::invalid_argument("PSCALE: the scale factor cannot be 0");
+      real(kPscale, 0, s);
+    } else if (c == "MOVE" || c == "SUSTAIN") {
+      need(1, 3);
+      double v = number(c, w[1]);
+      bool nowait = false, absolute = false;
+      for (size_t k = 2; k < w.size(); ++k) {
+        if (w[k] == "NOWAIT") nowait = true;
+        else if (c == "MOVE" && (w[k] == "ABS" || w[k] == "REL")) absolute = w[k] == "ABS";
+        else throw std::invalid_argument(c + ": unknown option '" + w[k] + "'");
+      }
+      u8(kMove, od::hp_move_sub::kNowait, nowait ? 1 : 0);
+      if (c == "MOVE") real(kMove, absolute ? od::hp_move_sub::kAbsolute : od::hp_move_sub::kRelative, v);
+      else real(kSustain, 0, v);
+      if (!nowait) wait_running();  // without NOWAIT the command completes first (3-12)
+    } else if (c == "TRIG") {
+      need(0, 1);
+      static const std::map<std::string, uint8_t> modes = {{"HOLD", 0}, {"AUTO", 1}, {"INT", 1}, {"SGL", 2},
+                                                           {"SYS", 3},  {"CHAN0", 4}, {"CHAN", 4}};
+      std::string m = w.size() > 1 ? w[1] : "SGL";  // "TRIG" alone is TRIG SGL
+      if (!modes.count(m)) throw std::invalid_argument("TRIG: mode must be HOLD, AUTO, INT, SGL, SYS or CHAN0");
+      u8(kTrig, 0, modes.at(m));
+    } else if (c == "DELAY") {
+      need(1, 1);
+      double s = number(c, w[1]);
+      if (s < 0 || s > 65.535) throw std::invalid_argument("DELAY: 0.000 to 65.535 seconds");
+      write(kDelay, 0, od::encode<uint16_t>(static_cast<uint16_t>(std::llround(s * 1000))));
+    } else if (c == "STANDBY") {
+      need(0, 2);
+      // No mode: ON; no sense: as previously set (3-6).
+      static const std::map<std::string, uint8_t> modes = {{"OFF", 0}, {"ON", 1}, {"AUTO", 2}};
+      uint8_t mode = 1;
+      size_t k = 1;
+      if (w.size() > k && modes.count(w[k])) mode = modes.at(w[k++]);
+      if (w.size() > k) u8(kOutput, od::hp_output_sub::kStandbySense, sense(c, w[k++]));
+      if (w.size() > k) throw std::invalid_argument("STANDBY: unknown word '" + w[k] + "'");
+      u8(kOutput, od::hp_output_sub::kStandbyMode, mode);
+    } else if (c == "PULSE") {
+      need(2, 3);
+      if (w[1] != "SD" && w[1] != "SS") throw std::invalid_argument("PULSE: mode must be SD or SS");
+      uint8_t p = sense(c, w[2]);
+      uint8_t n = w.size() > 3 ? sense(c, w[3]) : p;  // NDIR defaults to PSTP's sense
+      u8(kOutput, od::hp_output_sub::kPstpSense, p);
+      u8(kOutput, od::hp_output_sub::kNdirSense, n);
+      u8(kOutput, od::hp_output_sub::kPulseMode, w[1] == "SS" ? 1 : 0);
+    } else if (c == "HARDLIM") {
+      need(1, 2);
+      uint8_t p = sense(c, w[1]);
+      u8(kLimits, od::hp_limits_sub::kPlimSense, p);
+      u8(kLimits, od::hp_limits_sub::kNlimSense, w.size() > 2 ? sense(c, w[2]) : p);
+    } else if (c == "HALT") {
+      need(1, 1);
+      if (w[1] == "SGL") u8(kLimits, od::hp_limits_sub::kHaltSgl, 1);
+      else if (w[1] == "OFF") u8(kLimits, od::hp_limits_sub::kHaltMode, 2);
+      else u8(kLimits, od::hp_limits_sub::kHaltMode, sense(c, w[1]));
+    } else if (c == "POS") {
+      need(1, 1);
+      real(kPosition, 0, number(c, w[1]));
+    } else if (c == "POS?") {
+      need(0, 0);
+      read(kPosition, 0, od::DataType::Real64, "POS?");
+    } else if (c == "DONE?") {
+      need(0, 0);
+      read(kDone, 0, od::DataType::Integer8, "DONE?");
+    } else if (c == "ERR?" || c == "ERROR?") {
+      need(0, 0);
+      read(kError, 0, od::DataType::Unsigned8, "ERROR?");
+    } else if (c == "QSCALE") {
+      need(1, 1);
+      real(kQuadrature, od::hp_quad_sub::kQscale, number(c, w[1]));
+    } else if (c == "QINDEX") {
+      need(0, 1);
+      static const std::map<std::string, uint8_t> modes = {{"OFF", 0}, {"ONCE", 1}, {"SGL", 2}};
+      std::string m = w.size() > 1 ? w[1] : "SGL";
+      if (!modes.count(m)) throw std::invalid_argument("QINDEX: mode must be OFF, ONCE or SGL");
+      u8(kQuadrature, od::hp_quad_sub::kQindex, modes.at(m));
+    } else if (c == "QPOS?") {
+      need(0, 0);
+      read(kQuadrature, od::hp_quad_sub::kQpos, od::DataType::Real64, "QPOS?");
+    } else if (c == "ENABLE" || c == "DISABLE") {
+      if (w.size() != 2 || w[1] != "INTR") throw std::invalid_argument(c + ": only " + c + " INTR");
+      u8(kInterrupt, od::hp_intr_sub::kEnable, c == "ENABLE" ? 1 : 0);
+    } else {
+      throw std::invalid_argument("'" + c + "' is not an HP 44714A command");
+    }
+  }
+};
+
+}  // namespace
+
+std::vector<HpAccess> plan_hp_words(const std::string& text, unsigned channel) {
+  Planner p{channel, {}};
+  std::stringstream ss(text);
+  std::string one;
+  while (std::getline(ss, one, ';')) {
+    auto w = split_words(one);
+    if (!w.empty()) p.command(w);
+  }
+  if (p.out.empty()) throw std::invalid_argument("no HP command given");
+  return p.out;
+}
+
+std::string hp_error_text(unsigned n) {
+  switch (n) {
+    case 0: return "no error";
+    case 89: return "ACCESSORY BUSY";
+    case 90: return "NO ACTION DEFINED";
+    case 91: return "MUST STOP TO CHANGE DIRECTION";
+    case 92: return "NOT VALID IN WIDTH MODE";
+    case 93: return "TERMINAL CARD TEST JUMPER SET";
+    case 94: return "CANNOT MOVE WHILE STANDBY ON";
+    default: return "unknown error";
+  }
+}
+
+std::string hp_conflict_text(unsigned row) {
+  switch (row) {
+    case 0: return "no conflict";
+    case 1: return "slope = 0; min-to-max range unattainable";
+    case 2: return "min = 0; slope = 0; no pulses can be generated";
+    case 3: return "min = max = slope = 0; no pulses can be generated";
+    case 4: return "pulse width larger than the period of max (FREQ) / period < max width (WIDTH)";
+    case 5: return "min > max";
+    case 6: return "outside the module's specifications (appendix A)";
+    default: return "unknown conflict";
+  }
+}
+
+std::string hp_done_text(int code) {
+  switch (code) {
+    case -3: return "waiting for trigger";
+    case -2: return "running";
+    case -1: return "SUSTAIN running / ready for next command";
+    case 0: return "move completed successfully";
+    case 1: return "move aborted because of halt";
+    case 2: return "move aborted because of hard limit";
+    default: return "unknown";
+  }
+}
+
+}  // namespace stepnode::tools
