@@ -14,6 +14,7 @@
 #include "tools/stepctl/watch.hpp"
 #include "tools/stepctl/axis_commands.hpp"
 #include "tools/stepctl/hp_command.hpp"
+#include "tools/stepctl/hp_words.hpp"
 
 using namespace stepnode;
 using namespace stepnode::tools;
@@ -219,6 +220,7 @@ int main(int argc, char** argv) {
   try {
     ObjectCatalog catalog(eds);
     if (*watch) return run_watch(iface, catalog, passive, seconds);
+    if (*hp) plan_hp_words(hp_words, static_cast<unsigned>(hp_channel));  // bad words: exit 2 before the bus
     MasterBus bus(iface);
     bus.set_sdo_timeout_ms(timeout_ms);
     if (*nmt) return cmd_nmt(bus, nmt_what, node, timeout_ms);
