@@ -1,5 +1,6 @@
 #include "bridge/observer/discovery_plan.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iterator>
@@ -19,6 +20,7 @@ constexpr uint16_t kTpdoMap = 0x1A00;
 constexpr uint32_t kCobInvalid = 0x80000000u;
 // HP 44714A PSCALE (REAL64, user units per step), one per axis block.
 constexpr uint16_t kPscaleOffset = 0x11;
+constexpr size_t kMaxNameLength = 255;
 // What the snapshot reads of each axis, in this order.
 constexpr uint16_t kSnapshotOffsets[] = {0x01, 0x18, 0x19, 0x05, 0x06};
 constexpr uint8_t kSnapshotItems = std::size(kSnapshotOffsets);
@@ -111,8 +113,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       if (++k_ > 4) phase_ = Phase::Name;
       return;
     case Phase::Name: {
-      // VISIBLE_STRING; some devices pad with NULs.
-      size_t n = d.size();
+      // VISIBLE_STRING; some devices pad with NULs. A name is short: a node that sends
+      // kilobytes does not get them all republished in every NodeHealth.
+      size_t n = std::min<size_t>(d.size(), kMaxNameLength);
       while (n > 0 && d[n - 1] == 0) --n;
       info_.device_name.assign(d.begin(), d.begin() + static_cast<long>(n));
       return after_name();
