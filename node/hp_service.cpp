@@ -1,5 +1,6 @@
 #include "node/hp_service.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "od/hp_objects.hpp"
@@ -232,9 +233,10 @@ void HpService::power_up(uint64_t now_us) {
   }
 }
 
-void HpService::on_sync(uint64_t now_us) {
+void HpService::on_sync(uint64_t now_us, uint64_t frame_us) {
   advance(now_us);
-  for (auto& ch : channels_) ch->sync(now());
+  motion::Tick at = motion_.ticks(std::min(frame_us, now_us));
+  for (auto& ch : channels_) ch->sync(at);
   advance(now_us);
 }
 

@@ -26,8 +26,9 @@ class HpService {
   void advance(uint64_t now_us);
   // Power-up / NMT reset node: the axes, then the channels' power-on state and stored settings.
   void power_up(uint64_t now_us);
-  // A SYNC was received (or produced): TRIG SYS.
-  void on_sync(uint64_t now_us);
+  // A SYNC was received (or produced) at `frame_us` (<= now_us; its arrival on the bus):
+  // TRIG SYS. The armed channels are idle, so a start a little in the past is exact.
+  void on_sync(uint64_t now_us, uint64_t frame_us);
 
   motion::hp::Channel& channel(unsigned a) { return *channels_.at(a); }
 

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <ctime>
 #include <iostream>
 
 #include "node/canopen_node.hpp"
@@ -34,6 +35,18 @@ std::vector<node::BusEvent> bus_events(const canio::ReceivedFrame& r) {
   return out;
 }
 
+// When the frame reached the socket, on CLOCK_MONOTONIC (`now`): the kernel stamps it on
+// CLOCK_REALTIME, so its age is measured on that clock. Without a usable stamp: now.
+uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
+  if (!r.kernel_time_ns) return now;
+  timespec real{};
+  clock_gettime(CLOCK_REALTIME, &real);
+  int64_t real_now_ns = static_cast<int64_t>(real.tv_sec) * 1'000'000'000 + real.tv_nsec;
+  int64_t age_us = (real_now_ns - static_cast<int64_t>(r.kernel_time_ns)) / 1000;
+  if (age_us < 0 || age_us > 100'000 || static_cast<uint64_t>(age_us) > now) return now;  // clock stepped
+  return now - static_cast<uint64_t>(age_us);
+}
+
 int run(const node::NodeConfig& cfg) {
   canio::SocketCan can(cfg.iface);
   node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
@@ -43,7 +56,12 @@ int run(const node::NodeConfig& cfg) {
   node::HpService hp(canopen.dictionary(), cfg.options.device, motion, canopen.emcy());
   canopen.on_advance = [&hp](uint64_t now) { hp.advance(now); };
   canopen.on_reset_application = [&hp](uint64_t now) { hp.power_up(now); };
-  canopen.on_sync = [&hp](uint64_t now) { hp.on_sync(now); };
+  // TRIG SYS starts at the SYNC frame's arrival (the kernel's receive timestamp), not when
+  // this process got round to reading it: every node on the bus then starts together.
+  uint64_t frame_arrival_us = 0;
+  canopen.on_sync = [&hp, &frame_arrival_us](uint64_t now) {
+    hp.on_sync(now, frame_arrival_us && frame_arrival_us <= now ? frame_arrival_us : now);
+  };
   canopen.on_heartbeat_lost = [&motion](uint8_t, uint64_t now) { motion.master_lost(now); };
 
   canio::EventLoop loop;
@@ -57,7 +75,9 @@ int run(const node::NodeConfig& cfg) {
         for (auto e : bus_events(*r)) canopen.on_bus_event(e, now);
         continue;
       }
+      frame_arrival_us = arrival_us(*r, now);
       canopen.on_frame(r->frame, now);
+      frame_arrival_us = 0;
     }
   });
   loop.every(cfg.tick_us, [&] {

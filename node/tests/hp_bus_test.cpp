@@ -33,7 +33,7 @@ class HpBus : public NodeHarness {
     hp = std::make_unique<HpService>(od(), info, *motion, node->emcy());
     node->on_advance = [this](uint64_t now) { hp->advance(now); };
     node->on_reset_application = [this](uint64_t now) { hp->power_up(now); };
-    node->on_sync = [this](uint64_t now) { hp->on_sync(now); };
+    node->on_sync = [this](uint64_t now) { hp->on_sync(now, now); };
     hp->power_up(t);
     nmt(0x01);  // operational: TPDOs go out
   }
@@ -320,6 +320,16 @@ TEST_F(HpBus, TrigSysStartsTwoAxesOnOneSync) {
   EXPECT_EQ(first[0], first[1]);
   // The power-on profile starts from 0 Hz at 500 Hz/s: the first step 63.2 ms after SYNC.
   EXPECT_NEAR(static_cast<double>(first[0] - static_cast<uint32_t>(sync_at)) / 1000, 63.2, 0.2);
+}
+
+TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
+  ASSERT_EQ(trig(3), 0u);
+  ASSERT_EQ(move(5, false, true), 0u);
+  advance_us(3'000);
+  hp->on_sync(t, t - 700);  // the frame reached the socket 700 us before the node read it
+  EXPECT_EQ(*sdo_read(index(0, kTiming), od::hp_timing_sub::kTriggerUs), static_cast<uint32_t>(t - 700));
+  wait_s(1);
+  EXPECT_EQ(mechanical(), 5);
 }
 
 TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
