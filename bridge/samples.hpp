@@ -48,7 +48,8 @@ struct AxisPositionSample {
 
 struct BusCounters {
   uint64_t frames = 0;        // every frame received
-  uint64_t bad_frames = 0;    // frames that could not be decoded (wrong length, unknown)
+  uint64_t bad_frames = 0;    // malformed: wrong length (TPDO shorter than its mapping, EMCY,
+                              // SYNC, heartbeat), no such NMT state
   uint64_t undecoded = 0;     // well-formed frames the bridge has no use for: RPDOs, TPDOs of
                               // nodes not (yet) discovered or being remapped, TIME, RTR
   uint64_t error_frames = 0;  // CAN error frames from the controller

@@ -19,10 +19,9 @@ struct ObserverConfig {
   uint32_t retry_initial_ms = 200;     // backoff after a failed discovery, doubling ...
   uint32_t retry_max_ms = 10'000;      // ... up to this
   uint32_t health_period_ms = 1000;    // NodeHealth republished at least this often
-  // After a failure (a collision with another master, or the confusion it leaves) the
-  // wait for quiet gets a random extra of up to
-  // this much, so two bridges on one bus that saw the same boot-up do not collide again
-  // and again in lockstep.
+  // After a failed SDO read (a collision with another master, or the confusion it leaves)
+  // the wait for quiet gets a random extra of up to this much, so two bridges on one bus
+  // that saw the same boot-up do not collide again and again in lockstep.
   uint32_t collision_jitter_ms = 200;
   uint32_t random_seed = 0;            // 0: taken from the observer's address (differs per process)
   // The socket delivers the bridge's own frames back to it (CAN_RAW_RECV_OWN_MSGS, or a
@@ -41,6 +40,8 @@ struct ObservedFrame {
   uint8_t controller_status = 0;
 };
 
+// Samples go out from inside on_frame/on_tick. AxisPositionSample::publish_time_ns is
+// left 0: the publisher stamps it when it writes (the observer has no clock).
 class BusObserver {
  public:
   BusObserver(SampleSink& sink, ObserverConfig config = {});
