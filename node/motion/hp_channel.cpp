@@ -254,8 +254,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_target_ = target;
     } else {
       sustain_rate_ = target;
-      int64_t level = axis_.generator().ramp().phase_per_step / kClockHz;  // levels per Hz
-      axis_.external_velocity(at, std::llround(target * static_cast<double>(level)));
+      axis_.external_velocity(at, level_of(axis_.generator().ramp(), target));
     }
     return;
   }

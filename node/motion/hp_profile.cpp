@@ -28,34 +28,44 @@ Conflict check_profile(const Profile& p) {
   return Conflict::None;
 }
 
-int64_t levels_per_hz(double slope) {
-  constexpr int64_t kFinest = int64_t{1} << 16;
-  if (slope <= 0) return kFinest;
-  // ticks per level = kClockHz / (slope * L) must be >= 1; at least 64 keeps the cost of a
-  // ramp (one engine interval per level) near that of the steps themselves.
-  double most = static_cast<double>(kClockHz) / (slope * 64);
-  if (most >= static_cast<double>(kFinest)) return kFinest;
-  return std::max<int64_t>(1, static_cast<int64_t>(std::bit_floor(static_cast<uint64_t>(most))));
+double level_resolution_hz(double slope) {
+  // A ramp changes the level once per interval of kClockHz * resolution / slope ticks; at
+  // least 64 ticks (13 us) keeps its cost near that of the steps. Never finer than 2^-16 Hz.
+  return std::max(64.0 * slope / static_cast<double>(kClockHz), 1.0 / 65536.0);
 }
 
 RampSpec freq_ramp(const Profile& p, double run_hz) {
-  const int64_t per_hz = levels_per_hz(p.slope);
   RampSpec r;
-  r.phase_per_step = kClockHz * per_hz;
-  r.base_level = std::llround(p.min * static_cast<double>(per_hz));
-  r.run_level = std::max<int64_t>(r.base_level, std::llround(run_hz * static_cast<double>(per_hz)));
+  run_hz = std::max(run_hz, p.min);
+  // The run rate is exact: the level size is run_hz divided by a whole number of levels
+  // (no coarser than level_resolution_hz), and phase_per_step = kClockHz / level size,
+  // rounded to an integer (relative error <= 0.5 / phase_per_step: < 2e-7 at 100 kHz/s,
+  // < 2e-6 at the module's 1 MHz/s). The minimum and later
+  // SUSTAIN velocities are within half a level of what was asked.
+  const double fine = level_resolution_hz(p.slope);
+  const double target = run_hz > 0 ? run_hz : std::max(p.max, 1.0);
+  const int64_t run_levels = std::max<int64_t>(1, static_cast<int64_t>(std::floor(target / fine)));
+  r.phase_per_step = std::llround(static_cast<double>(kClockHz) * static_cast<double>(run_levels) / target);
+  const double per_hz = static_cast<double>(r.phase_per_step) / static_cast<double>(kClockHz);  // levels per Hz
+  r.run_level = run_hz > 0 ? run_levels : 0;
+  r.base_level = std::min<int64_t>(r.run_level, std::llround(p.min * per_hz));
   if (p.slope > 0) {
-    // ticks per level = kClockHz / (slope * L), kept as a fraction with the slope in uHz/s.
-    int64_t slope_uhz = std::max<int64_t>(1, std::llround(p.slope * 1e6));
-    r.accel_ticks_per_level = Rational{kClockHz * 1'000'000, slope_uhz * per_hz};
+    // ticks per level = kClockHz / (slope * levels per Hz), in 1/4096 ticks (the slope to a
+    // few ppm; small terms keep the engine's k * num products far from overflow).
+    double ticks = static_cast<double>(kClockHz) / (p.slope * per_hz);
+    r.accel_ticks_per_level = Rational{std::max<int64_t>(4096, std::llround(ticks * 4096)), 4096};
   } else {
     r.accel_ticks_per_level = Rational{1, 1};  // unused: min == max
   }
   r.decel_ticks_per_level = r.accel_ticks_per_level;
-  int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * static_cast<double>(per_hz));
+  int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * per_hz);
   r.min_creep_level = std::max<int64_t>({int64_t{1}, r.base_level, one_step});
   r.horner_triangle_rule = false;
   return r;
+}
+
+int64_t level_of(const RampSpec& r, double hz) {
+  return std::llround(hz * static_cast<double>(r.phase_per_step) / static_cast<double>(kClockHz));
 }
 
 RampSpec constant_rate(double hz) {

@@ -6,7 +6,8 @@ namespace stepnode::motion {
 
 Tick StepGenerator::interval_length(Rational z, int64_t k) const {
   // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den).
-  Tick len = (k + 1) * z.num / z.den - k * z.num / z.den;
+  __int128 n = z.num;  // k * num can pass 2^63 for long, fine-grained ramps
+  Tick len = static_cast<Tick>((k + 1) * n / z.den - k * n / z.den);
   return std::max<Tick>(len, 1);
 }
 
