@@ -44,7 +44,15 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   // SUSTAIN velocities are within half a level of what was asked.
   const double fine = level_resolution_hz(p.slope);
   const double target = run_hz > 0 ? run_hz : std::max(p.max, 1.0);
-  const int64_t run_levels = std::max<int64_t>(1, static_cast<int64_t>(std::floor(target / fine)));
+  // Of the level counts near the finest, the one whose phase_per_step is nearest an integer.
+  const int64_t most = std::max<int64_t>(1, static_cast<int64_t>(std::floor(target / fine)));
+  int64_t run_levels = most;
+  double best = 1.0;
+  for (int64_t n = most; n >= std::max<int64_t>(1, most - 255); --n) {
+    double d = static_cast<double>(kClockHz) * static_cast<double>(n) / target;
+    double off = std::fabs(d - std::round(d)) / d;
+    if (off < best) best = off, run_levels = n;
+  }
   r.phase_per_step = std::llround(static_cast<double>(kClockHz) * static_cast<double>(run_levels) / target);
   const double per_hz = static_cast<double>(r.phase_per_step) / static_cast<double>(kClockHz);  // levels per Hz
   r.run_level = run_hz > 0 ? run_levels : 0;
