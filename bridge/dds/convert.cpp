@@ -101,6 +101,7 @@ std::string_view state_text(::stepnode::NodeState state) {
   out.sdo_failures(s.sdo_failures);
   out.bus_frames(s.bus.frames);
   out.bus_bad_frames(s.bus.bad_frames);
+  out.bus_undecoded(s.bus.undecoded);
   out.bus_error_frames(s.bus.error_frames);
   out.bus_error_passive(s.bus.error_passive);
   out.bus_off(s.bus.bus_off);

@@ -114,6 +114,7 @@ nlohmann::json to_json(const ::stepnode::NodeHealth& h) {
           {"sdo_failures", h.sdo_failures()},
           {"bus_frames", h.bus_frames()},
           {"bus_bad_frames", h.bus_bad_frames()},
+          {"bus_undecoded", h.bus_undecoded()},
           {"bus_error_frames", h.bus_error_frames()},
           {"bus_error_passive", h.bus_error_passive()},
           {"bus_off", h.bus_off()},

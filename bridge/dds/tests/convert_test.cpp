@@ -102,6 +102,7 @@ TEST(Convert, NodeHealthFields) {
   s.sdo_failures = 4;
   s.bus.frames = 1000;
   s.bus.bad_frames = 5;
+  s.bus.undecoded = 10;
   s.bus.error_frames = 6;
   s.bus.error_passive = 7;
   s.bus.bus_off = 8;
@@ -125,6 +126,7 @@ TEST(Convert, NodeHealthFields) {
   EXPECT_EQ(d.sdo_failures(), 4u);
   EXPECT_EQ(d.bus_frames(), 1000u);
   EXPECT_EQ(d.bus_bad_frames(), 5u);
+  EXPECT_EQ(d.bus_undecoded(), 10u);
   EXPECT_EQ(d.bus_error_frames(), 6u);
   EXPECT_EQ(d.bus_error_passive(), 7u);
   EXPECT_EQ(d.bus_off(), 8u);

@@ -217,14 +217,16 @@ TEST(DdsQos, BuiltInTable) {
   EXPECT_EQ(ros_status.resource_limits().max_instances, 1);
 }
 
+// A data_reader profile here (profiles are process-wide and cannot be unloaded; the
+// shipped file's data_writer profiles are checked in profiles_test.cpp).
 TEST(DdsQos, XmlProfileReplacesTheBuiltInQos) {
   const std::string xml = R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
   <profiles>
-    <data_writer profile_name="stepnode_emergency">
+    <data_reader profile_name="stepnode_emergency">
       <topic><historyQos><kind>KEEP_LAST</kind><depth>7</depth></historyQos></topic>
       <qos><reliability><kind>RELIABLE</kind></reliability><data_sharing><kind>AUTOMATIC</kind></data_sharing></qos>
-    </data_writer>
+    </data_reader>
   </profiles>
 </dds>)";
   auto* factory = efd::DomainParticipantFactory::get_instance();
@@ -232,13 +234,13 @@ TEST(DdsQos, XmlProfileReplacesTheBuiltInQos) {
   ParticipantOptions options;
   options.domain = random_domain();
   auto* participant = create_participant(options);
-  auto* publisher = participant->create_publisher(efd::PUBLISHER_QOS_DEFAULT);
+  auto* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
   bool from_profile = false;
-  auto emcy = writer_qos(TopicKind::Emergency, false, *publisher, &from_profile);
+  auto emcy = reader_qos(TopicKind::Emergency, false, *subscriber, 0, &from_profile);
   EXPECT_TRUE(from_profile);
   EXPECT_EQ(emcy.history().depth, 7);
   EXPECT_EQ(emcy.data_sharing().kind(), efd::AUTO);
-  auto status = writer_qos(TopicKind::AxisStatus, false, *publisher, &from_profile);
+  auto status = reader_qos(TopicKind::AxisStatus, false, *subscriber, 0, &from_profile);
   EXPECT_FALSE(from_profile);
   EXPECT_EQ(status.data_sharing().kind(), efd::OFF);
   delete_participant(participant);
