@@ -332,6 +332,24 @@ TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
   EXPECT_EQ(mechanical(), 5);
 }
 
+TEST_F(HpBus, StoredSettingsComeBackAfterResetNode) {
+  // PSCALE, PROFILE and DELAY are stored by 0x1010 and applied at the next power-up (the
+  // PROFILE before the PSCALE, as Figure 3-3 gives them).
+  ASSERT_EQ(profile(0, 100, 100, 0, 25e-6), 0u);
+  ASSERT_EQ(put(index(0, kPscale), 0, 0.5), 0u);
+  ASSERT_EQ(sdo_write(index(0, kDelay), 0, 250, 2), 0u);
+  ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173), 0u);  // "save"
+  nmt(0x81);  // reset node
+  advance_us(10'000);
+  nmt(0x01);
+  EXPECT_EQ(get(index(0, kPscale)), 0.5);
+  ASSERT_EQ(move(10, false, true), 0u);  // 20 steps at 100 Hz after 250 ms
+  wait_s(0.25 + 0.195);
+  EXPECT_LT(mechanical(), 20);
+  wait_s(0.02);
+  EXPECT_EQ(mechanical(), 20);
+}
+
 TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
   EXPECT_EQ(*sdo_read(0x1A03, 0), 3u);
   EXPECT_EQ(*sdo_read(0x1A03, 1), 0x20180008u);
