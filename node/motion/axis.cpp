@@ -352,7 +352,8 @@ void Axis::check_stall(const Step& step) {
 }
 
 void Axis::on_step(const Step& step) {
-  motor().step(step.time, step.direction);  // the step sink
+  if (job_ == Job::External && external_pulse) motor().output_pulse(step.time, external_pulse(step));
+  else motor().step(step.time, step.direction);  // the step sink
   motor_position_ += step.direction;
   if (job_ == Job::Move) ++move_done_steps_;
   if (on_any_step) on_any_step(step);

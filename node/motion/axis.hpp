@@ -85,6 +85,8 @@ class Axis {
   std::function<void(const Step&)> on_external_step;
   // The external job ended by itself (Completed) or by the e-stop or a Horner stop.
   std::function<void(ExternalEnd, Tick)> on_external_end;
+  // Set by the front end: how an external job's step leaves the outputs (PULSE SD|SS).
+  std::function<OutputPulse(const Step&)> external_pulse;
   // Every step of any job (the HP quadrature index and first-step time watch them).
   std::function<void(const Step&)> on_any_step;
 

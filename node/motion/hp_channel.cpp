@@ -15,6 +15,18 @@ Tick seconds_to_ticks(double s) { return static_cast<Tick>(std::llround(s * stat
 Channel::Channel(Axis& axis, const MotorPort& inputs) : axis_(axis), inputs_(inputs) {
   axis_.on_external_step = [this](const Step& s) { on_step(s); };
   axis_.on_external_end = [this](Axis::ExternalEnd how, Tick at) { on_axis_end(how, at); };
+  axis_.external_pulse = [this](const Step& s) {
+    // PULSE SD|SS: the output the pulse appears at and the levels (3-7, Figure 3-1).
+    last_pulse_ = pulse_for(pulse_, s.direction);
+    ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
+    OutputPulse out;
+    out.step_direction = pulse_.mode == PulseMode::StepDirection;
+    out.on_ndir = last_pulse_.output == Output::Ndir;
+    out.ndir_level = last_pulse_.ndir_level;
+    out.ndir_positive_level = pulse_.ndir_high;
+    out.pstp_level = last_pulse_.pstp_level;
+    return out;
+  };
   axis_.on_any_step = [this](const Step&) {
     // QINDEX ONCE: counting begins on the leading edge of the first index pulse (3-21).
     bool m = inputs_.marker();
@@ -339,8 +351,6 @@ void Channel::set_halt_input(bool level_high, Tick now) {
 }
 
 void Channel::on_step(const Step& step) {
-  last_pulse_ = pulse_for(pulse_, step.direction);
-  ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
   if (awaiting_first_step_) {
     first_step_ = step.time;
     awaiting_first_step_ = false;

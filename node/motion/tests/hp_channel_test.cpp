@@ -608,6 +608,49 @@ TEST_F(HpChannel, StepStepPulsesGoToPstpForwardAndNdirBackward) {
   EXPECT_EQ(position(), 6);
 }
 
+// A motor that keeps the output pulses it was given.
+class PulseRecorder : public sim::AxisMachine {
+ public:
+  using sim::AxisMachine::AxisMachine;
+  void output_pulse(Tick time, const OutputPulse& p) override {
+    pulses.push_back(p);
+    sim::AxisMachine::output_pulse(time, p);  // the driver decodes the direction
+  }
+  std::vector<OutputPulse> pulses;
+};
+
+TEST(HpPulseOutputs, TheMotorGetsTheOutputsAndFollowsTheirDirectionInBothModes) {
+  for (PulseMode mode : {PulseMode::StepDirection, PulseMode::StepStep})
+    for (bool ndir_high : {false, true}) {
+      sim::AxisMachineConfig m;
+      m.encoder = sim::EncoderKind::None;
+      PulseRecorder motor(m);
+      bool estop = false;
+      Axis axis(AxisConfig{}, {&motor}, &estop);
+      Channel ch(axis, motor);
+      ch.pulse(PulseSetup{mode, true, ndir_high});
+      ASSERT_EQ(ch.move(7, false, true, 0), Error::None);
+      ch.advance(kClockHz);
+      ASSERT_EQ(ch.move(-3, false, true, kClockHz), Error::None);
+      ch.advance(2 * kClockHz);
+      ASSERT_EQ(motor.pulses.size(), 10u);
+      EXPECT_EQ(motor.position(), 4) << "mode " << int(mode) << " ndir " << ndir_high;
+      const OutputPulse& fwd = motor.pulses.front();
+      const OutputPulse& back = motor.pulses.back();
+      if (mode == PulseMode::StepDirection) {
+        EXPECT_FALSE(fwd.on_ndir);
+        EXPECT_FALSE(back.on_ndir);
+        EXPECT_EQ(fwd.ndir_level, ndir_high);  // NDIR at its sense level for positive motion
+        EXPECT_EQ(back.ndir_level, !ndir_high);
+      } else {
+        EXPECT_FALSE(fwd.on_ndir);
+        EXPECT_TRUE(back.on_ndir);
+      }
+      // The position counter counts the engine's steps; here the wiring agrees with it.
+      EXPECT_EQ(axis.motor_position(), 4);
+    }
+}
+
 // ---------------------------------------------------------------- quadrature counter (3-20..3-22)
 
 TEST_F(HpChannel, QscaleQindexSglAndOnce) {
