@@ -45,10 +45,13 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   const double fine = level_resolution_hz(p.slope);
   const double target = run_hz > 0 ? run_hz : std::max(p.max, 1.0);
   // Of the level counts near the finest, the one whose phase_per_step is nearest an integer.
+  // A rate only a few levels above 0 (a steep slope) may use up to 8x finer levels (one
+  // change per 8 ticks at least): its ramp is short, and its rate needs the choice.
   const int64_t most = std::max<int64_t>(1, static_cast<int64_t>(std::floor(target / fine)));
+  const int64_t top = most < 256 ? most * 8 : most;
   int64_t run_levels = most;
   double best = 1.0;
-  for (int64_t n = most; n >= std::max<int64_t>(1, most - 255); --n) {
+  for (int64_t n = top; n >= std::max<int64_t>(1, most - 255); --n) {
     double d = static_cast<double>(kClockHz) * static_cast<double>(n) / target;
     double off = std::fabs(d - std::round(d)) / d;
     if (off < best) best = off, run_levels = n;
