@@ -190,18 +190,17 @@ void print_snapshot(const stepwatch::WatchModel& model, bool json) {
 }
 
 int run_once(Watcher& w, const Options& o) {
+  // Done when the bridge is matched, something arrived, and nothing more for longer than
+  // the bridge's heartbeat period (500 ms): a historical sample whose first push was lost
+  // comes with the next heartbeat. Nothing at all: wait up to --wait-ms.
+  constexpr auto kQuiet = std::chrono::milliseconds(700);
   auto deadline = Clock::now() + std::chrono::milliseconds(o.wait_ms);
   auto last_data = Clock::now();
   bool matched_seen = false;
   while (Clock::now() < deadline && !g_stop) {
     if (w.poll() > 0) last_data = Clock::now();
-    bool matched = w.bridge_matched();
-    if (matched && !matched_seen) {
-      matched_seen = true;
-      last_data = Clock::now();
-    }
-    // Matched, and the historical data has stopped coming for 300 ms: done.
-    if (matched_seen && Clock::now() - last_data > std::chrono::milliseconds(300)) break;
+    matched_seen = matched_seen || w.bridge_matched();
+    if (matched_seen && !w.model().empty() && Clock::now() - last_data > kQuiet) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   w.poll();
