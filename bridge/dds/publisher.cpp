@@ -92,11 +92,7 @@ void DdsPublisher::emergency(const EmergencySample& sample) {
 }
 
 void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
-  if (naming_.ros2) {
-    status_instances_.clear();
-    position_instances_.clear();
-    return;
-  }
+  if (naming_.ros2) return;  // unkeyed: no instances to dispose
   auto dispose = [&](TopicKind kind, std::set<uint16_t>& instances, auto make) {
     for (auto it = instances.lower_bound(static_cast<uint16_t>(node << 8));
          it != instances.end() && (*it >> 8) == node;) {
