@@ -201,6 +201,9 @@ void HpService::publish(unsigned a) {
   uint16_t out = index(a, kOutput);
   od.put<uint8_t>(out, od::hp_output_sub::kStbyLevel, ch.stby_output_high() ? 1 : 0);
   od.put<uint8_t>(out, od::hp_output_sub::kMotorPowered, ch.motor_powered() ? 1 : 0);
+  // In the simulation the STBY output drives motor power (issue 4): with STANDBY ON a
+  // Horner move still counts its steps, but the load does not move.
+  motion_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
   od.put<uint32_t>(out, od::hp_output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
   od.put<uint32_t>(out, od::hp_output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
   od.put<double>(index(a, kPosition), 0, ch.pos_query());

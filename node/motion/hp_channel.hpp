@@ -72,6 +72,10 @@ class Channel {
   StandbyMode standby_mode() const { return standby_; }
   bool standby_sense_high() const { return standby_high_; }
   bool motor_powered() const { return powered_; }
+  // Whether pulses reach a powered motor: STANDBY AUTO applies power before any pulse
+  // (whichever front end moves the axis), so only STANDBY ON leaves the motor without
+  // torque while it is pulsed.
+  bool pulses_reach_powered_motor() const { return standby_ != StandbyMode::On; }
   bool stby_output_high() const { return !powered_ == standby_high_; }
   const PulseSetup& pulse_setup() const { return pulse_; }
   HaltMode halt_mode() const { return halt_mode_; }

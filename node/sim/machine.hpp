@@ -44,6 +44,10 @@ class AxisMachine : public motion::MotorPort {
   void step(int direction) { step(last_step_time_, direction); }
   // External force: the load moved without steps.
   void displace(int64_t steps) { position_ += steps; }
+  // Motor power (the drive's standby input): an unpowered motor holds no torque, so a
+  // pulse it receives moves nothing (HP 44714A STANDBY ON, 3-13).
+  void set_powered(bool powered) { powered_ = powered; }
+  bool powered() const { return powered_; }
 
   int64_t position() const { return position_; }
   bool home() const override { return config_.home && config_.home->contains(position_); }
@@ -66,6 +70,7 @@ class AxisMachine : public motion::MotorPort {
   int64_t position_ = 0;
   uint64_t pulses_ = 0;
   motion::Tick last_step_time_ = 0;
+  bool powered_ = true;
 };
 
 // The whole machine: the axes and the inputs they share.

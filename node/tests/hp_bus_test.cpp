@@ -359,3 +359,39 @@ TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
 
 }  // namespace
 }  // namespace stepnode::node::test
+
+namespace stepnode::node::test {
+namespace {
+
+// STANDBY (3-13) in the simulation: the STBY output is the motor's power. With STANDBY ON
+// an HP MOVE is refused (error 94); a Horner move still runs and counts its steps, but the
+// unpowered motor holds no torque and the load does not move. AUTO powers the motor before
+// the pulses, whichever front end sends them; OFF applies power.
+TEST_F(HpBus, StandbyOnLeavesTheMotorUnpoweredSoHornerStepsMoveNothing) {
+  uint16_t out = index(0, kOutput);
+  auto horner_move_rel = [&](int32_t steps) {
+    ASSERT_EQ(sdo_write(0x2000, 0, 0, 2), 0u);
+    ASSERT_EQ(sdo_write(0x2002, 0, static_cast<uint32_t>(steps)), 0u);
+    ASSERT_EQ(sdo_write(0x2000, 0, 1u << 7, 2), 0u);  // %Q8 move relative
+    wait_s(2);
+  };
+  ASSERT_EQ(sdo_write(0x2000, 0, 1u << 13, 2), 0u);  // %Q14 Clear Errors (power-up)
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 1, 1), 0u);  // STANDBY ON
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kMotorPowered), 0u);
+  EXPECT_EQ(move(1), kDeviceState);
+  EXPECT_EQ(error(), 94);
+  horner_move_rel(100);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2005, 0)), 100) << "the module counted its steps";
+  EXPECT_EQ(mechanical(), 0) << "an unpowered motor does not move";
+
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 2, 1), 0u);  // AUTO
+  horner_move_rel(100);
+  EXPECT_EQ(mechanical(), 100);
+  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 0, 1), 0u);  // OFF: power applied
+  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kMotorPowered), 1u);
+  horner_move_rel(-50);
+  EXPECT_EQ(mechanical(), 50);
+}
+
+}  // namespace
+}  // namespace stepnode::node::test
