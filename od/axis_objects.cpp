@@ -10,12 +10,6 @@ namespace {
 using DT = DataType;
 using AC = Access;
 
-template <class T>
-void limits(Entry& e, T low, T high) {
-  e.low = encode<T>(low);
-  e.high = encode<T>(high);
-}
-
 std::string axis_name(unsigned axis, const char* what) {
   return "Axis " + std::to_string(axis + 1) + " " + what;
 }

@@ -55,6 +55,14 @@ struct Entry {
   uint32_t mapping_word() const;  // index<<16 | sub<<8 | bits, as in 0x1600/0x1A00
 };
 
+// Sets an entry's inclusive range, in its own type (a write outside gets 0x0609003x).
+template <class T>
+Entry& limits(Entry& e, T low, T high) {
+  e.low = encode<T>(low);
+  e.high = encode<T>(high);
+  return e;
+}
+
 struct Object {
   uint16_t index = 0;
   std::string name;

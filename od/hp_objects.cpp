@@ -8,12 +8,6 @@ namespace {
 using DT = DataType;
 using AC = Access;
 
-template <class T>
-void limits(Entry& e, T low, T high) {
-  e.low = encode<T>(low);
-  e.high = encode<T>(high);
-}
-
 // A command object: acting on it is the point, storing it is not.
 Entry& command(Entry& e) {
   e.persistent = false;
