@@ -188,7 +188,7 @@ class PositionListener : public efd::DataReaderListener {
 //   report            -> "result RECEIVED DUPLICATES P50_NS P99_NS MAX_NS CPU_S"
 //                        once all arrived, or nothing new came for 500 ms
 //   quit
-int run_subscriber(uint32_t domain, const std::string& profiles) {
+int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth) {
   bridge::dds::ParticipantOptions po;
   po.domain = domain;
   po.profiles_file = profiles;
@@ -197,13 +197,16 @@ int run_subscriber(uint32_t domain, const std::string& profiles) {
   efd::Topic* topic = nullptr;
   register_axis_position(participant, topic);
   efd::Subscriber* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
-  // RELIABLE, KEEP_ALL, room for a whole run: the reader never makes the writer drop.
+  // RELIABLE; KEEP_ALL (depth 0) with room for more than the listener ever leaves
+  // untaken, or KEEP_LAST depth per instance.
   efd::DataReaderQos qos = bridge::dds::builtin_reader_qos(bridge::dds::TopicKind::AxisPosition, false, 1);
-  qos.history().kind = efd::KEEP_ALL_HISTORY_QOS;
+  const int32_t per_instance = depth > 0 ? depth : 100'000;
+  qos.history().kind = depth > 0 ? efd::KEEP_LAST_HISTORY_QOS : efd::KEEP_ALL_HISTORY_QOS;
+  qos.history().depth = per_instance;
   qos.resource_limits().max_instances = 128;  // Fast DDS: max_samples >= instances x per instance
-  qos.resource_limits().max_samples_per_instance = 100'000;
-  qos.resource_limits().max_samples = 128 * 100'000;
-  qos.resource_limits().allocated_samples = 4096;
+  qos.resource_limits().max_samples_per_instance = per_instance;
+  qos.resource_limits().max_samples = 128 * per_instance;
+  qos.resource_limits().allocated_samples = std::min(per_instance, 4096);
   PositionListener listener;
   efd::DataReader* reader = subscriber->create_datareader(topic, qos, &listener);
   if (!reader) throw std::runtime_error("subscriber: Fast DDS refused the reader QoS");
@@ -318,7 +321,7 @@ struct RunRequest {
 
 class Subscriber {
  public:
-  Subscriber(const std::string& exe, uint32_t domain, const std::string& profiles) {
+  Subscriber(const std::string& exe, uint32_t domain, const std::string& profiles, int32_t depth) {
     int to_child[2], from_child[2];
     if (pipe(to_child) != 0 || pipe(from_child) != 0) throw std::runtime_error("pipe failed");
     posix_spawn_file_actions_t actions;
@@ -327,7 +330,8 @@ class Subscriber {
     posix_spawn_file_actions_adddup2(&actions, from_child[1], 1);
     posix_spawn_file_actions_addclose(&actions, to_child[1]);
     posix_spawn_file_actions_addclose(&actions, from_child[0]);
-    std::vector<std::string> args{exe, "--subscriber", "--domain", std::to_string(domain)};
+    std::vector<std::string> args{exe, "--subscriber", "--domain", std::to_string(domain), "--reader-depth",
+                                  std::to_string(depth)};
     if (!profiles.empty()) args.insert(args.end(), {"--profiles", profiles});
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
@@ -412,11 +416,12 @@ struct Options {
   std::string profiles;
   int slice_us = 100;
   double max_p99_ms = 10;
+  int32_t reader_depth = 0;
 };
 
 int run_publisher(const Options& opt, const std::string& exe) {
   // The subscriber first: it is up (and discovering) while this side starts.
-  Subscriber sub(exe, opt.domain, opt.profiles);
+  Subscriber sub(exe, opt.domain, opt.profiles, opt.reader_depth);
 
   bridge::dds::PublisherOptions po;
   po.participant.domain = opt.domain;
@@ -564,11 +569,18 @@ int run_publisher(const Options& opt, const std::string& exe) {
   pthread_getcpuclockid(generator.native_handle(), &generator_clock);
   pthread_getcpuclockid(bridge_thread.native_handle(), &bridge_clock);
 
-  std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d%s%s\n", opt.domain, opt.seconds,
-              opt.nodes, opt.slice_us, opt.profiles.empty() ? "" : " --profiles ", opt.profiles.c_str());
+  std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d%s%s\n", opt.domain,
+              opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.profiles.empty() ? "" : " --profiles ",
+              opt.profiles.c_str());
   std::printf("latency = CLOCK_REALTIME at the subscriber's take - can_time_ns (frame queued); CPU = %% of one core\n");
-  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %7s %7s %7s | %7s %8s\n", "rate/s", "mode", "achieved", "sent",
-              "lost", "p50 us", "p99 us", "max us", "proc %", "thread%", "sub %", "RSS MB", "backlog");
+  std::printf("CPU: proc = publishing process minus the generator thread, thread = the bridge thread, sub = the\n"
+              "subscriber process, gen = the generator thread; us/smp = CPU microseconds per sample; backlog = most\n"
+              "frames waiting for the bridge thread at one wake-up\n");
+  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "rate/s", "mode", "achieved",
+              "sent", "lost", "p50 us", "p99 us", "max us", "proc %", "thread%", "sub %", "gen %", "proc", "sub",
+              "RSS MB", "backlog");
+  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "", "", "", "", "", "", "",
+              "", "", "", "", "", "us/smp", "us/smp", "", "");
   std::fflush(stdout);
 
   struct Best {
@@ -602,11 +614,14 @@ int run_publisher(const Options& opt, const std::string& exe) {
       const Subscriber::Result r = sub.report();
       const uint64_t failures = publisher.write_failures() + alone_failures.load() - failures_before;
       const int64_t lost = total - static_cast<int64_t>(r.received);
-      std::printf("%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %7.1f %7.1f %7.1f | %7.1f %8zu%s\n", rate,
-                  m.c_str(), static_cast<double>(total) / gen_wall, static_cast<long long>(total),
-                  static_cast<long long>(lost), static_cast<double>(r.p50) / 1e3, static_cast<double>(r.p99) / 1e3,
-                  static_cast<double>(r.max) / 1e3, 100.0 * ((cpu1 - cpu0) - (gen1 - gen0)) / wall,
-                  100.0 * (br1 - br0) / wall, 100.0 * r.cpu_s / wall, static_cast<double>(rss_kb) / 1024.0, backlog,
+      const double proc_s = (cpu1 - cpu0) - (gen1 - gen0);
+      const auto samples = static_cast<double>(total);
+      std::printf("%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %6.1f %7.1f %6.1f %6.1f | %6.2f %6.2f | %6.1f %7zu%s\n",
+                  rate, m.c_str(), samples / gen_wall, static_cast<long long>(total), static_cast<long long>(lost),
+                  static_cast<double>(r.p50) / 1e3, static_cast<double>(r.p99) / 1e3, static_cast<double>(r.max) / 1e3,
+                  100.0 * proc_s / wall, 100.0 * (br1 - br0) / wall, 100.0 * r.cpu_s / wall,
+                  100.0 * (gen1 - gen0) / wall, 1e6 * proc_s / samples, 1e6 * r.cpu_s / samples,
+                  static_cast<double>(rss_kb) / 1024.0, backlog,
                   failures ? (" write failures " + std::to_string(failures)).c_str() : "");
       std::fflush(stdout);
       const bool ok = lost == 0 && static_cast<double>(r.p99) < opt.max_p99_ms * 1e6 &&
@@ -651,6 +666,8 @@ int main(int argc, char** argv) {
   app.add_option("--profiles", opt.profiles, "Fast DDS XML profiles for every participant (QoS experiments)");
   app.add_option("--slice-us", opt.slice_us, "generator pacing slice (default 100 us)")->check(CLI::Range(10, 100000));
   app.add_option("--max-p99-ms", opt.max_p99_ms, "p99 limit for the 'highest rate' line (default 10)");
+  app.add_option("--reader-depth", opt.reader_depth, "subscriber history: 0 KEEP_ALL (default), N KEEP_LAST N")
+      ->check(CLI::Range(0, 100'000));
   app.add_option("--log-level", log_level, "spdlog level (default warn)");
   app.add_flag("--subscriber", subscriber, "internal: run as the subscriber process");
   try {
@@ -662,7 +679,7 @@ int main(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
-    if (subscriber) return run_subscriber(opt.domain, opt.profiles);
+    if (subscriber) return run_subscriber(opt.domain, opt.profiles, opt.reader_depth);
     return run_publisher(opt, "/proc/self/exe");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pipeline_bench: %s\n", e.what());

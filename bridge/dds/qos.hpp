@@ -8,6 +8,8 @@
 //
 // Heartbeat period 500 ms (Fast DDS: 3 s), so a reader that missed the first push of
 // the history (another vendor's, before it discovered the writer) catches up quickly.
+// AxisPosition (one sample per TPDO) has a nack suppression duration of 1 ms (Fast DDS:
+// 0, which wakes the writer's event thread on every write; see qos.cpp).
 // Writers never block on a slow subscriber: KEEP_LAST replaces the oldest sample instead
 // of waiting, and max_blocking_time is 1 ms for the rare resource-limit case. Data-sharing
 // delivery is OFF (Fast DDS 2.9 lost RELIABLE samples under overload and crashed
