@@ -28,6 +28,7 @@
 // is the process's VmRSS at the end of the run.
 #include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -188,7 +189,28 @@ class PositionListener : public efd::DataReaderListener {
 //   report            -> "result RECEIVED DUPLICATES P50_NS P99_NS MAX_NS CPU_S"
 //                        once all arrived, or nothing new came for 500 ms
 //   quit
-int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth) {
+int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth, uint32_t port_queue) {
+  if (port_queue > 0) {
+    // The reader side's shared-memory port: the ring of datagram descriptors the writers
+    // push into (Fast DDS default 512, 0.5 MB segment). Full means dropped; a subscriber
+    // descheduled for a few ms at 80,000 samples/s overflows the default.
+    std::string xml = R"(<?xml version="1.0" encoding="UTF-8"?>
+<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
+<transport_descriptors>
+<transport_descriptor><transport_id>bench_shm</transport_id><type>SHM</type>
+<segment_size>)" + std::to_string(std::max<uint32_t>(512 * 1024, port_queue * 512)) +
+                      R"(</segment_size><port_queue_capacity>)" + std::to_string(port_queue) + R"(</port_queue_capacity>
+</transport_descriptor>
+<transport_descriptor><transport_id>bench_udp</transport_id><type>UDPv4</type></transport_descriptor>
+</transport_descriptors>
+<participant profile_name=")" + std::string(bridge::dds::kParticipantProfile) + R"("><rtps>
+<userTransports><transport_id>bench_shm</transport_id><transport_id>bench_udp</transport_id></userTransports>
+<useBuiltinTransports>false</useBuiltinTransports></rtps></participant>
+</profiles></dds>)";
+    if (efd::DomainParticipantFactory::get_instance()->load_XML_profiles_string(xml.c_str(), xml.size()) !=
+        ReturnCode_t::RETCODE_OK)
+      throw std::runtime_error("subscriber: Fast DDS rejected the port queue profile");
+  }
   bridge::dds::ParticipantOptions po;
   po.domain = domain;
   po.profiles_file = profiles;
@@ -321,7 +343,8 @@ struct RunRequest {
 
 class Subscriber {
  public:
-  Subscriber(const std::string& exe, uint32_t domain, const std::string& profiles, int32_t depth) {
+  Subscriber(const std::string& exe, uint32_t domain, const std::string& profiles, int32_t depth,
+             uint32_t port_queue) {
     int to_child[2], from_child[2];
     if (pipe(to_child) != 0 || pipe(from_child) != 0) throw std::runtime_error("pipe failed");
     posix_spawn_file_actions_t actions;
@@ -330,8 +353,9 @@ class Subscriber {
     posix_spawn_file_actions_adddup2(&actions, from_child[1], 1);
     posix_spawn_file_actions_addclose(&actions, to_child[1]);
     posix_spawn_file_actions_addclose(&actions, from_child[0]);
-    std::vector<std::string> args{exe, "--subscriber", "--domain", std::to_string(domain), "--reader-depth",
-                                  std::to_string(depth)};
+    std::vector<std::string> args{exe,           "--subscriber",        "--domain", std::to_string(domain),
+                                  "--reader-depth", std::to_string(depth), "--sub-port-queue",
+                                  std::to_string(port_queue)};
     if (!profiles.empty()) args.insert(args.end(), {"--profiles", profiles});
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
@@ -417,11 +441,12 @@ struct Options {
   int slice_us = 100;
   double max_p99_ms = 10;
   int32_t reader_depth = 0;
+  uint32_t sub_port_queue = 0;
 };
 
 int run_publisher(const Options& opt, const std::string& exe) {
   // The subscriber first: it is up (and discovering) while this side starts.
-  Subscriber sub(exe, opt.domain, opt.profiles, opt.reader_depth);
+  Subscriber sub(exe, opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
 
   bridge::dds::PublisherOptions po;
   po.participant.domain = opt.domain;
@@ -569,9 +594,9 @@ int run_publisher(const Options& opt, const std::string& exe) {
   pthread_getcpuclockid(generator.native_handle(), &generator_clock);
   pthread_getcpuclockid(bridge_thread.native_handle(), &bridge_clock);
 
-  std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d%s%s\n", opt.domain,
-              opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.profiles.empty() ? "" : " --profiles ",
-              opt.profiles.c_str());
+  std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d --sub-port-queue %u%s%s\n",
+              opt.domain, opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.sub_port_queue,
+              opt.profiles.empty() ? "" : " --profiles ", opt.profiles.c_str());
   std::printf("latency = CLOCK_REALTIME at the subscriber's take - can_time_ns (frame queued); CPU = %% of one core\n");
   std::printf("CPU: proc = publishing process minus the generator thread, thread = the bridge thread, sub = the\n"
               "subscriber process, gen = the generator thread; us/smp = CPU microseconds per sample; backlog = most\n"
@@ -668,6 +693,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-p99-ms", opt.max_p99_ms, "p99 limit for the 'highest rate' line (default 10)");
   app.add_option("--reader-depth", opt.reader_depth, "subscriber history: 0 KEEP_ALL (default), N KEEP_LAST N")
       ->check(CLI::Range(0, 100'000));
+  app.add_option("--sub-port-queue", opt.sub_port_queue,
+                 "subscriber's shared-memory port queue (datagrams; 0: Fast DDS default 512)")
+      ->check(CLI::Range(0u, 1'000'000u));
   app.add_option("--log-level", log_level, "spdlog level (default warn)");
   app.add_flag("--subscriber", subscriber, "internal: run as the subscriber process");
   try {
@@ -679,7 +707,7 @@ int main(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
-    if (subscriber) return run_subscriber(opt.domain, opt.profiles, opt.reader_depth);
+    if (subscriber) return run_subscriber(opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
     return run_publisher(opt, "/proc/self/exe");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pipeline_bench: %s\n", e.what());
