@@ -36,6 +36,8 @@ TEST(ShippedProfiles, StepbridgeXmlEqualsTheBuiltInWriterQos) {
     EXPECT_EQ(xml.data_sharing().kind(), efd::OFF);
     EXPECT_EQ(xml.publish_mode().kind, builtin.publish_mode().kind);
     EXPECT_EQ(xml.reliable_writer_qos().times.heartbeatPeriod, builtin.reliable_writer_qos().times.heartbeatPeriod);
+    EXPECT_EQ(xml.reliable_writer_qos().times.nackSupressionDuration,
+              builtin.reliable_writer_qos().times.nackSupressionDuration);
     EXPECT_EQ(xml.resource_limits().max_samples_per_instance, builtin.resource_limits().max_samples_per_instance);
     // Every axis of every node fits (NodeHealth and Emergency: one instance per node).
     EXPECT_GE(xml.resource_limits().max_instances, kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition ? kMaxInstances : 127);
