@@ -16,6 +16,15 @@ namespace {
 double real(std::span<const uint8_t> d) { return od::decode<double>(d); }
 uint8_t u8(std::span<const uint8_t> d) { return od::decode<uint8_t>(d); }
 
+// A MOVE whose step count a double holds exactly (|steps| <= 2^53). Beyond that (1e300, or
+// 1e10 at PSCALE 1e-300) PositionCounter's llround overflows and the move "completes"
+// at once without a step; NaN and infinities fail the comparison too.
+bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
+  if (!std::isfinite(d)) return false;
+  const double steps = (absolute ? d - ch.pos_query() : d) / ch.scale();
+  return std::fabs(steps) <= 9007199254740992.0;
+}
+
 }  // namespace
 
 HpService::HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, MotionService& motion,
@@ -80,10 +89,10 @@ void HpService::install_hooks(unsigned a) {
   });
   auto nowait = [this, a] { return dictionary_.get<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait) != 0; };
   hook(kMove, od::hp_move_sub::kRelative, [this, a, &ch, nowait](std::span<const uint8_t> d) {
-    return std::isfinite(real(d)) ? result(a, ch.move(real(d), false, nowait(), now())) : SdoAbort::InvalidValue;
+    return move_in_range(ch, real(d), false) ? result(a, ch.move(real(d), false, nowait(), now())) : SdoAbort::InvalidValue;
   });
   hook(kMove, od::hp_move_sub::kAbsolute, [this, a, &ch, nowait](std::span<const uint8_t> d) {
-    return std::isfinite(real(d)) ? result(a, ch.move(real(d), true, nowait(), now())) : SdoAbort::InvalidValue;
+    return move_in_range(ch, real(d), true) ? result(a, ch.move(real(d), true, nowait(), now())) : SdoAbort::InvalidValue;
   });
   hook(kSustain, 0, [this, a, &ch, nowait](std::span<const uint8_t> d) {
     return std::isfinite(real(d)) ? result(a, ch.sustain(real(d), nowait(), now())) : SdoAbort::InvalidValue;

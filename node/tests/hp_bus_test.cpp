@@ -245,6 +245,20 @@ TEST_F(HpBus, PscaleRoundOffExamplesRelAndAbs) {
   }
 }
 
+TEST_F(HpBus, AMoveOfMoreStepsThanADoubleCountsExactlyIsARangeAbort) {
+  // 1e300 steps (or 1e10 units at PSCALE 1e-300) overflowed llround in rel_steps: the MOVE
+  // was accepted, "completed" at once without a step and DONE? read 0.
+  constexpr uint32_t kRange = 0x06090030;
+  EXPECT_EQ(move(1e300), kRange);
+  EXPECT_EQ(move(-1e300, true), kRange);
+  ASSERT_EQ(put(index(0, kPscale), 0, 1e-300), 0u);
+  EXPECT_EQ(move(1e10), kRange);
+  ASSERT_EQ(put(index(0, kPscale), 0, 1), 0u);
+  EXPECT_EQ(move(5), 0u);  // an ordinary move still goes
+  wait_s(1);
+  EXPECT_EQ(get(index(0, kPosition)), 5.0);
+}
+
 TEST_F(HpBus, ProfileConflictsAndErrorNumbersAreAborts) {
   EXPECT_EQ(profile(0, 500, 100, 200, 2e-3), kIncompatible);
   EXPECT_EQ(*sdo_read(index(0, kConflict), 0), 5u);
