@@ -18,6 +18,7 @@ constexpr uint16_t kDeviceName = 0x1008;
 constexpr uint16_t kTpdoComm = 0x1800;
 constexpr uint16_t kTpdoMap = 0x1A00;
 constexpr uint32_t kCobInvalid = 0x80000000u;
+constexpr uint32_t kCobExtended = 0x20000000u;
 // HP 44714A PSCALE (REAL64, user units per step), one per axis block.
 constexpr uint16_t kPscaleOffset = 0x11;
 constexpr size_t kMaxNameLength = 255;
@@ -115,9 +116,12 @@ void DiscoveryPlan::value(const od::Bytes& d) {
     case Phase::Name: {
       // VISIBLE_STRING; some devices pad with NULs. A name is short: a node that sends
       // kilobytes does not get them all republished in every NodeHealth.
+      // Cut at the first NUL; VISIBLE_STRING is ISO 646, so any other byte becomes '?'
+      // (NodeHealth's string must be valid UTF-8 for its readers, and printable).
       size_t n = std::min<size_t>(d.size(), kMaxNameLength);
-      while (n > 0 && d[n - 1] == 0) --n;
-      info_.device_name.assign(d.begin(), d.begin() + static_cast<long>(n));
+      n = static_cast<size_t>(std::find(d.begin(), d.begin() + static_cast<long>(n), 0) - d.begin());
+      info_.device_name.clear();
+      for (size_t i = 0; i < n; ++i) info_.device_name += d[i] >= 0x20 && d[i] <= 0x7E ? static_cast<char>(d[i]) : '?';
       return after_name();
     }
     case Phase::AxisProbe:
@@ -136,7 +140,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       return;
     }
     case Phase::TpdoComm:
-      if (!exact_u32(d, 4, v) || (v & kCobInvalid)) return next_tpdo();
+      // Bit 29: a 29-bit CAN-ID, which the bridge does not receive (and whose low 11 bits
+      // would name another frame).
+      if (!exact_u32(d, 4, v) || (v & (kCobInvalid | kCobExtended))) return next_tpdo();
       pending_ = TpdoInfo{k_, static_cast<uint16_t>(v & 0x7FF), {}};
       phase_ = Phase::TpdoCount;
       return;

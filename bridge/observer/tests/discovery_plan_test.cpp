@@ -91,6 +91,35 @@ TEST(DiscoveryPlanOrder, WrongSizedAnswersAreTakenAsAbsent) {
   EXPECT_FALSE(p.info().is_stepnode());
 }
 
+TEST(DiscoveryPlanOrder, ADeviceNameIsCutAtItsFirstNulAndPrintableAscii) {
+  // VISIBLE_STRING is ISO 646. A third-party device's Latin-1 byte made NodeHealth carry
+  // invalid UTF-8 (stepwatch --json's dump throws on it, ROS 2 readers cannot decode it)
+  // and an escape byte went into stepwatch's table as is.
+  for (auto [bytes, expected] : {std::pair<od::Bytes, std::string>{{'M', 0xFC, 'l', 'l', 'e', 'r'}, "M?ller"},
+                                 {{'a', 'b', 0, 'x', 'y', 0, 0}, "ab"},
+                                 {{0x1B, '[', '2', 'J', 'n'}, "?[2Jn"}}) {
+    DiscoveryPlan p;
+    run(p, [&](SdoRead r) -> od::SdoResult { return r.index == 0x1008 ? value(bytes) : none(); });
+    EXPECT_EQ(p.info().device_name, expected);
+  }
+}
+
+TEST(DiscoveryPlanOrder, ATpdoWithA29BitCobIdIsNotDecoded) {
+  // Bit 29 set: the CAN-ID is 29 bits (CiA 301 7.5.2.35). Masked to 11 bits it named
+  // another frame (0x18000185 -> node 5's TPDO1) and took its decoder slot.
+  DiscoveryPlan p;
+  run(p, [](SdoRead r) -> od::SdoResult {
+    if (r.index == 0x1018) return value(u32(r.sub == 2 ? 0x53544550 : 0));
+    if (r.index == 0x2001) return value(od::encode<uint16_t>(0));
+    if (r.index == 0x1800) return value(u32(0x20000000u | 0x18000185u));
+    if (r.index == 0x1801) return value(u32(0x285));
+    if (r.index == 0x1A00 || r.index == 0x1A01) return value({0});
+    return none();
+  });
+  ASSERT_EQ(p.info().tpdos.size(), 1u);
+  EXPECT_EQ(p.info().tpdos[0].cob_id, 0x285);
+}
+
 TEST(DiscoveryPlanOrder, RemapAfterDoneReadsOnlyTheTpdos) {
   DiscoveryPlan p;
   auto answer = [](SdoRead r) -> od::SdoResult {
