@@ -22,6 +22,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -265,6 +266,9 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   if (o.once && (app.count("--count") || app.count("--duration-ms")))
     throw UsageError("--count and --duration-ms are for the live mode, not --once");
   if (o.interval_ms < 10) throw UsageError("--interval-ms must be at least 10");
+  // A bad argument is status 2; status 1 means "no samples" to a script running --once.
+  if (!o.profiles.empty() && !std::filesystem::is_regular_file(o.profiles))
+    throw UsageError("profiles " + o.profiles + ": cannot read file");
   auto level = spdlog::level::from_str(o.log_level);
   if (level == spdlog::level::off && o.log_level != "off") throw UsageError("log level \"" + o.log_level + "\": unknown");
   return o;

@@ -105,7 +105,7 @@ TEST(StepwatchCli, LiveJsonStreamsSamples) {
 
 TEST(StepwatchCli, BadArgumentsExit2WithOneLine) {
   for (const char* args : {"--domain 300", "--ros2-prefix x", "--wait-ms 5", "--bogus", "--ros2 --ros2-prefix a//b",
-                           "--once --count 3"}) {
+                           "--once --count 3", "--once --profiles /nonexistent/stepwatch.xml"}) {
     Result r = run(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;
