@@ -18,6 +18,7 @@
 namespace stepnode::bridge {
 namespace {
 
+constexpr uint16_t kHeartbeatProducerTime = 0x1017;
 constexpr uint16_t kPdoParamsFirst = 0x1800;  // TPDO communication 0x1800.., mapping 0x1A00..
 constexpr uint16_t kPdoParamsLast = 0x1BFF;
 
@@ -197,6 +198,13 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
     // use the new layout) and read the TPDO parameters again once the channel is quiet.
     tpdo.suspend(id, static_cast<uint16_t>(*ev.foreign_download & 0x1FF));
     n->plan.restart_tpdos();
+  }
+  if (ev.foreign_download && *ev.foreign_download == kHeartbeatProducerTime) {
+    // A master changed the node's heartbeat period (or switched it off): the measured
+    // interval no longer holds, so a longer period would look like a loss. Forget it and
+    // read the node again (0x1017 first); until then the timeout is the default one.
+    n->heartbeat.forget_interval();
+    begin_discovery(*n);
   }
   if (ev.completed) read_done(id, *n, now, of.can_time_ns, out);
   else pump(*n, now, out);

@@ -29,6 +29,12 @@ class HeartbeatMonitor {
   // True once, when the node goes from alive to lost.
   bool check_lost(uint64_t now_us, uint32_t configured_ms, uint16_t producer_ms, bool producer_known);
 
+  // The node's period changed (a master wrote its 0x1017): measure it afresh.
+  void forget_interval() {
+    interval_us_ = 0;
+    last_was_heartbeat = false;
+  }
+
   NodeState state() const { return state_; }
   bool lost() const { return state_ == NodeState::Lost; }
   uint32_t age_ms(uint64_t now_us) const;

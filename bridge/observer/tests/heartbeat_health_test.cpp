@@ -56,6 +56,34 @@ TEST_F(Beating, LossAfterThreeIntervalsButAtLeastOneSecond) {
   EXPECT_EQ(bus.sink.disposed.size(), 1u);
 }
 
+// A master changes the node's heartbeat period: the interval measured before (100 ms, so
+// a 1 s timeout) must not turn the slower heartbeat into a loss.
+TEST_F(Beating, AMasterSlowingTheHeartbeatIsNoLoss) {
+  bus.master_start(5);
+  bus.master_download(0x1017, 0, od::encode<uint16_t>(2000));
+  ASSERT_TRUE(bus.master->done());
+  ASSERT_TRUE(bus.master->result().ok());
+  bus.beat_of(node).period_us = 2'000'000;
+  bus.beat_of(node).next_us = bus.now_us + 2'000'000;
+  bus.sink.clear();
+  bus.run_ms(10'000);
+  EXPECT_NE(bus.observer.node_health(5, bus.now_us).state, NodeState::Lost);
+  EXPECT_TRUE(bus.sink.disposed.empty());
+  EXPECT_TRUE(bus.observer.node_health(5, bus.now_us).discovered) << "read again after the change";
+}
+
+// Switched off (0x1017 = 0): no heartbeat to miss, so no verdict at all.
+TEST_F(Beating, AMasterSwitchingTheHeartbeatOffIsNoLoss) {
+  bus.master_start(5);
+  bus.master_download(0x1017, 0, od::encode<uint16_t>(0));
+  ASSERT_TRUE(bus.master->result().ok());
+  bus.beat_of(node).beating = false;
+  bus.sink.clear();
+  bus.run_ms(10'000);
+  EXPECT_NE(bus.observer.node_health(5, bus.now_us).state, NodeState::Lost);
+  EXPECT_TRUE(bus.sink.disposed.empty());
+}
+
 TEST_F(Beating, TpdosOfALostNodeAreNotPublished) {
   bus.beat_of(node).beating = false;
   bus.run_ms(1200);
