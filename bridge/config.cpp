@@ -42,15 +42,16 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
       if (!given(option)) into = *v.value<std::string>();
     }
   };
-  auto uint_key = [&](const char* key, const char* option, int64_t max, uint32_t& into) {
+  auto uint_key = [&](const char* key, const char* option, int64_t min, int64_t max, uint32_t& into) {
     if (auto v = t[key]) {
       auto n = v.value<int64_t>();
-      if (!v.is_integer() || !n || *n < 0 || *n > max) bad(key, "must be an integer 0.." + std::to_string(max));
+      if (!v.is_integer() || !n || *n < min || *n > max)
+        bad(key, "must be an integer " + std::to_string(min) + ".." + std::to_string(max));
       if (!option || !given(option)) into = static_cast<uint32_t>(*n);
     }
   };
   string_key("iface", "--iface", cfg.iface);
-  uint_key("domain", "--domain", kMaxDomain, cfg.domain);
+  uint_key("domain", "--domain", 0, kMaxDomain, cfg.domain);
   if (auto v = t["ros2"]) {
     if (!v.is_boolean()) bad("ros2", "must be true or false");
     if (!given("--ros2")) cfg.ros2 = *v.value<bool>();
@@ -58,9 +59,10 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   string_key("ros2_prefix", "--ros2-prefix", cfg.ros2_prefix);
   string_key("profiles", "--profiles", cfg.profiles);
   string_key("log_level", "--log-level", cfg.log_level);
-  uint_key("tick_ms", "--tick-ms", 1000, cfg.tick_ms);
-  uint_key("heartbeat_timeout_ms", nullptr, 3'600'000, cfg.heartbeat_timeout_ms);
-  uint_key("sdo_timeout_ms", nullptr, 60'000, cfg.sdo_timeout_ms);
+  uint_key("tick_ms", "--tick-ms", 1, 1000, cfg.tick_ms);
+  uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000, cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
+  // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
+  uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
   for (const auto& [key, value] : t) {
     static const char* known[] = {"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level",
                                   "tick_ms", "heartbeat_timeout_ms", "sdo_timeout_ms"};

@@ -153,6 +153,9 @@ class Watcher {
         if (it == instances_.end()) continue;
         auto [node, axis] = it->second;
         const char* topic = bridge::dds::idl_name(kind).data();
+        // In ROS 2 mode the topics are unkeyed: one instance holds every axis, and its end
+        // (the bridge left) says nothing about the last axis seen. Keyed: that axis is gone.
+        if (naming_.ros2) continue;
         if (kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition) model_.on_axis_disposed(node, axis);
         emit(now, "disposed", {{"topic", topic}, {"node", node}, {"axis", axis}},
              stepwatch::csv_disposed_row(now, topic, node, axis));
@@ -166,7 +169,7 @@ class Watcher {
     if (!options_.once && options_.json) {
       j["type"] = type;
       j["recv_time_ns"] = now;
-      std::cout << j.dump() << '\n' << std::flush;
+      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n' << std::flush;
     }
   }
 
@@ -183,7 +186,8 @@ class Watcher {
 
 void print_snapshot(const stepwatch::WatchModel& model, bool json) {
   if (json) {
-    for (const auto& j : model.snapshot()) std::cout << j.dump() << '\n';
+    for (const auto& j : model.snapshot())
+      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';  // names from other publishers may not be UTF-8
   } else {
     std::cout << model.table();
   }

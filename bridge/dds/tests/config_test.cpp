@@ -85,8 +85,11 @@ TEST(BridgeConfig, BadInputIsOneLineNamingTheProblem) {
   EXPECT_EQ(error_of({"--config", file}), "config " + file + ": domain: must be an integer 0..232");
   auto unknown = write_file("unknown.toml", "iface = \"can0\"\nnode_id = 3\n");
   EXPECT_EQ(error_of({"--config", unknown}), "config " + unknown + ": node_id: unknown key");
+  auto zero = write_file("zero.toml", "iface = \"can0\"\nsdo_timeout_ms = 0\n");
+  EXPECT_EQ(error_of({"--config", zero}), "config " + zero + ": sdo_timeout_ms: must be an integer 10..60000");
   std::filesystem::remove(file);
   std::filesystem::remove(unknown);
+  std::filesystem::remove(zero);
 }
 
 }  // namespace
