@@ -19,10 +19,12 @@ uint8_t u8(std::span<const uint8_t> d) { return od::decode<uint8_t>(d); }
 // A MOVE whose step count a double holds exactly (|steps| <= 2^53). Beyond that (1e300, or
 // 1e10 at PSCALE 1e-300) PositionCounter's llround overflows and the move "completes"
 // at once without a step; NaN and infinities fail the comparison too.
+// Appendix A: "Total number output pulses/channel in MOVE mode: ±2,147,483,647". A MOVE of
+// more (1e300 units, or 1e10 at PSCALE 1e-300) is a range abort, not a move.
 bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
   if (!std::isfinite(d)) return false;
   const double steps = (absolute ? d - ch.pos_query() : d) / ch.scale();
-  return std::fabs(steps) <= 9007199254740992.0;
+  return std::fabs(steps) < 2147483647.5;
 }
 
 }  // namespace

@@ -10,8 +10,9 @@ Conflict check_profile(const Profile& p) {
   const bool freq = p.mode == ProfileMode::Freq;
   const double top = freq ? kMaxPulseRateHz : kMaxWidthS;
   const double top_slope = freq ? kMaxSlopeHzPerS : kMaxWidthSlope;
+  const double finest_slope = freq ? kSlopeResolutionHzPerS : kWidthSlopeResolution;
   if (!(p.min >= 0 && p.max >= 0 && p.slope >= 0 && p.last >= 0) || p.min > top || p.max > top ||
-      p.slope > top_slope)
+      p.slope > top_slope || (p.slope > 0 && p.slope < finest_slope))
     return Conflict::OutOfRange;
   if (freq ? (p.last < kTimeResolutionS || p.last > kMaxWidthS) : (p.last <= 0 || p.last > kMaxWidthS))
     return Conflict::OutOfRange;

@@ -66,6 +66,9 @@ constexpr double kMaxPulseRateHz = 10'000;
 constexpr double kMaxSlopeHzPerS = 1'000'000;
 constexpr double kMaxWidthS = 65.535e-3;
 constexpr double kMaxWidthSlope = 1.0;  // s/s
+// Resolutions of the rates of change: a slope above 0 but finer than these is out of range.
+constexpr double kSlopeResolutionHzPerS = 25e-3;
+constexpr double kWidthSlopeResolution = 1e-6;  // s/s
 constexpr double kTimeResolutionS = 1e-6;
 constexpr uint16_t kMaxDelayMs = 65'535;  // DELAY 0.000..65.535 s in 1 ms steps (3-14)
 

@@ -245,7 +245,7 @@ TEST_F(HpBus, PscaleRoundOffExamplesRelAndAbs) {
   }
 }
 
-TEST_F(HpBus, AMoveOfMoreStepsThanADoubleCountsExactlyIsARangeAbort) {
+TEST_F(HpBus, AMoveOfMoreThanTheModulesPulsesIsARangeAbort) {
   // 1e300 steps (or 1e10 units at PSCALE 1e-300) overflowed llround in rel_steps: the MOVE
   // was accepted, "completed" at once without a step and DONE? read 0.
   constexpr uint32_t kRange = 0x06090030;
@@ -254,6 +254,9 @@ TEST_F(HpBus, AMoveOfMoreStepsThanADoubleCountsExactlyIsARangeAbort) {
   ASSERT_EQ(put(index(0, kPscale), 0, 1e-300), 0u);
   EXPECT_EQ(move(1e10), kRange);
   ASSERT_EQ(put(index(0, kPscale), 0, 1), 0u);
+  // Appendix A: at most 2,147,483,647 pulses in one MOVE.
+  EXPECT_EQ(move(2147483648.0), kRange);
+  EXPECT_EQ(move(-2147483648.0), kRange);
   EXPECT_EQ(move(5), 0u);  // an ordinary move still goes
   wait_s(1);
   EXPECT_EQ(get(index(0, kPosition)), 5.0);

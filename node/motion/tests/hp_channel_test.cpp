@@ -106,6 +106,13 @@ TEST_F(HpChannel, ProfileFreqSettingConflictsAreTheTablesRows) {
   // Appendix A: 10 kHz and 1 MHz/s at most.
   EXPECT_EQ(ch->profile(freq(0, 10'001, 500, 25e-6), now), Conflict::OutOfRange);
   EXPECT_EQ(ch->profile(freq(0, 1000, 1.1e6, 25e-6), now), Conflict::OutOfRange);
+  // ... and a rate of change resolved to 25 mHz/s (1 µs/s for widths): a slope above 0
+  // but finer is out of range (1e-15 Hz/s overflowed the ramp arithmetic).
+  EXPECT_EQ(ch->profile(freq(100, 800, 0.02, 25e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(freq(100, 800, 1e-15, 25e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(freq(100, 800, 0.025, 25e-6), now), Conflict::None);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-7, .1e-3), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, .1e-3), now), Conflict::None);
 }
 
 TEST_F(HpChannel, ProfileWidthSettingConflictsAreTheTablesRows) {
