@@ -18,12 +18,13 @@ from __future__ import annotations
 import itertools
 import json
 import os
+import signal
 import subprocess
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Dict, List, Optional
+from typing import Callable, Dict, List, Optional, Tuple
 
 import pytest
 
@@ -41,16 +42,18 @@ def _binary(env: str, default: str) -> Path:
     return p
 
 
+def cyclone_sub_bin() -> Path:
+    return _binary("CYCLONE_SUB_BIN", "build/bridge/interop/cyclone_sub")
+
+
+@pytest.fixture
 def stepbridge_bin() -> Path:
     return _binary("STEPBRIDGE_BIN", "build/bridge/stepbridge")
 
 
+@pytest.fixture
 def stepwatch_bin() -> Path:
     return _binary("STEPWATCH_BIN", "build/tools/stepwatch")
-
-
-def cyclone_sub_bin() -> Path:
-    return _binary("CYCLONE_SUB_BIN", "build/bridge/interop/cyclone_sub")
 
 
 # Domains 1..200; a counter seeded by the process id keeps consecutive tests (and two test
@@ -194,17 +197,48 @@ class CycloneSubscriber:
             self.log_path.write_text("\n".join(self._lines) + "\n")
 
 
-def stepwatch_once(domain: int, wait_ms: int = 3000, extra=(), allow_empty: bool = False) -> List[dict]:
-    """`stepwatch --once --json`: one JSON object per line (a node, or an axis). It exits 1
-    when nothing was published yet: [] with allow_empty, else a failure."""
-    argv = [str(stepwatch_bin()), "--domain", str(domain), "--once", "--json", "--wait-ms", str(wait_ms), *extra]
-    proc = subprocess.run(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          timeout=wait_ms / 1000 + 60)
-    out = proc.stdout.decode(errors="replace")
-    if allow_empty and proc.returncode == 1 and not out.strip():
-        return []
-    assert proc.returncode == 0, f"$ {' '.join(argv)}\nexit {proc.returncode}\n{out}\n{proc.stderr.decode(errors='replace')}"
-    return [json.loads(line) for line in out.splitlines() if line.strip()]
+def watch_once(stepwatch_bin: Path, domain: int, *extra: str, wait_ms: int = 8000) -> Tuple[int, List[dict], str]:
+    """stepwatch --once --json: (exit status, one dict per line, stderr). Exit 1 = nothing
+    published yet."""
+    r = subprocess.run([str(stepwatch_bin), "--once", "--json", "--domain", str(domain), "--wait-ms", str(wait_ms),
+                        *extra], capture_output=True, text=True, timeout=wait_ms / 1000 + 10)
+    return r.returncode, [json.loads(line) for line in r.stdout.splitlines() if line.strip()], r.stderr
+
+
+def wait_for_snapshot(stepwatch_bin, domain, predicate, timeout=10.0, extra=()) -> List[dict]:
+    """Repeats stepwatch --once until predicate(lines) holds; returns the last lines."""
+    deadline = time.monotonic() + timeout
+    lines: List[dict] = []
+    while time.monotonic() < deadline:
+        _, lines, _ = watch_once(stepwatch_bin, domain, *extra, wait_ms=3000)
+        if predicate(lines):
+            return lines
+        time.sleep(0.3)
+    pytest.fail(f"stepwatch never showed the expected state within {timeout} s; last: {lines}", pytrace=False)
+
+
+def node_line(lines: List[dict], node: int) -> Optional[dict]:
+    return next((l for l in lines if l["type"] == "node" and l["node"] == node), None)
+
+
+def axis_line(lines: List[dict], node: int, axis: int) -> Optional[dict]:
+    return next((l for l in lines if l["type"] == "axis" and l["node"] == node and l["axis"] == axis), None)
+
+
+class LiveWatch:
+    """stepwatch --json streaming every sample to a file until stopped."""
+
+    def __init__(self, stepwatch_bin: Path, domain: int, path: Path, *extra: str):
+        self.path = path
+        with open(path, "wb") as f:
+            self.proc = subprocess.Popen([str(stepwatch_bin), "--json", "--domain", str(domain), *extra],
+                                         stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
+
+    def stop(self) -> List[dict]:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            self.proc.wait(5)
+        return [json.loads(l) for l in self.path.read_text().splitlines() if l.startswith("{")]
 
 
 @pytest.fixture
@@ -213,7 +247,7 @@ def domain() -> int:
 
 
 @pytest.fixture
-def start_bridge(domain, tmp_path):
+def start_bridge(domain, stepbridge_bin, tmp_path):
     """Factory: start_bridge(*extra_args) -> Process running stepbridge on vcan0 and the
     test's domain. Killed at teardown; its log is printed."""
     bridges: List[Process] = []
@@ -221,7 +255,7 @@ def start_bridge(domain, tmp_path):
 
     def _start(*extra) -> Process:
         n = next(counter)
-        argv = [str(stepbridge_bin()), "--iface", CHANNEL, "--domain", str(domain), "--log-level", "debug",
+        argv = [str(stepbridge_bin), "--iface", CHANNEL, "--domain", str(domain), "--log-level", "debug",
                 *map(str, extra)]
         b = Process(argv, tmp_path / f"stepbridge-{n}.log")
         bridges.append(b)

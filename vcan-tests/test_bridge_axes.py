@@ -13,9 +13,9 @@ import time
 from axis_helpers import (
     AT_HOME, FAST, MOVING, NODE, SIM_SWITCHES, VALID, boot, clear_and_profile, seq_text, sequence, set_position,
 )
-from bridge_helpers import DDS_TIMEOUT, cyclone, domain, start_bridge, status_changes
+from bridge_helpers import DDS_TIMEOUT, cyclone, domain, start_bridge, status_changes, stepbridge_bin
 
-_ = (cyclone, domain, start_bridge)  # fixtures
+_ = (cyclone, domain, start_bridge, stepbridge_bin)  # fixtures
 
 
 def wait_discovered(cyc, node: int = NODE, axis: int = 1):

@@ -1,48 +1,28 @@
 """vcan tests of the DDS bridge (issue 5): stepnode on vcan0, stepbridge, and DDS
 subscribers in other processes: stepwatch (Fast DDS) and cyclone_sub (Cyclone DDS, built
-from the IDL alone). Each test uses its own random DDS domain.
+from the IDL alone). Each test uses its own DDS domain (bridge_helpers).
 
 Binaries: STEPBRIDGE_BIN (build/bridge/stepbridge), STEPWATCH_BIN (build/tools/stepwatch),
-CYCLONE_SUB_BIN (build/bridge/interop/cyclone_sub); a test whose binary is missing skips."""
+CYCLONE_SUB_BIN (build/bridge/interop/cyclone_sub); a missing binary fails the test."""
 
 from __future__ import annotations
 
-import json
-import os
-import random
 import signal
 import subprocess
 import time
 from pathlib import Path
-from typing import List, Optional, Tuple
+from typing import List
 
 import pytest
 
 from axis_helpers import NODE, boot, clear_and_profile
-from conftest import CHANNEL, REPO_ROOT
+from bridge_helpers import (
+    LiveWatch, axis_line, cyclone_sub_bin, domain, node_line, start_bridge, stepbridge_bin, stepwatch_bin, wait_for_snapshot,
+    watch_once,
+)
+from conftest import CHANNEL
 
-
-def _bin(var: str, default: str) -> Path:
-    p = Path(os.environ.get(var, default))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not p.exists():
-        pytest.skip(f"{p.name} not found at {p}: build it or set {var}")
-    return p
-
-
-@pytest.fixture
-def stepbridge_bin() -> Path:
-    return _bin("STEPBRIDGE_BIN", "build/bridge/stepbridge")
-
-
-@pytest.fixture
-def stepwatch_bin() -> Path:
-    return _bin("STEPWATCH_BIN", "build/tools/stepwatch")
-
-
-@pytest.fixture
-def domain() -> int:
-    return random.randint(50, 229)
+_ = (domain, start_bridge, stepbridge_bin, stepwatch_bin)  # fixtures
 
 
 @pytest.fixture
@@ -53,88 +33,15 @@ def node_config(tmp_path) -> Path:
     return p
 
 
-@pytest.fixture
-def start_bridge(stepbridge_bin, tmp_path):
-    """Factory: start_bridge(domain, *extra_args) -> Popen of stepbridge on vcan0. Every
-    bridge still running at the end is stopped (SIGTERM, then SIGKILL); logs are printed."""
-    procs: List[Tuple[subprocess.Popen, Path]] = []
-
-    def _start(domain: int, *extra: str) -> subprocess.Popen:
-        log = tmp_path / f"bridge-{len(procs) + 1}.log"
-        argv = [str(stepbridge_bin), "--iface", CHANNEL, "--domain", str(domain), *extra]
-        with open(log, "wb") as f:
-            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT,
-                                    start_new_session=True)
-        procs.append((proc, log))
-        time.sleep(0.3)
-        assert proc.poll() is None, f"stepbridge exited at once: {log.read_text()}"
-        return proc
-
-    yield _start
-
-    for proc, log in procs:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                proc.wait(5)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-        print(f"--- stepbridge log {log} ---\n{log.read_text()[-4000:]}")
-
-
-def watch_once(stepwatch_bin: Path, domain: int, *extra: str, wait_ms: int = 8000) -> Tuple[int, List[dict], str]:
-    """stepwatch --once --json: (exit status, one dict per line, stderr)."""
-    r = subprocess.run([str(stepwatch_bin), "--once", "--json", "--domain", str(domain), "--wait-ms", str(wait_ms),
-                        *extra], capture_output=True, text=True, timeout=wait_ms / 1000 + 10)
-    return r.returncode, [json.loads(line) for line in r.stdout.splitlines() if line.strip()], r.stderr
-
-
-def wait_for_snapshot(stepwatch_bin, domain, predicate, timeout=10.0, extra=()) -> List[dict]:
-    """Repeats stepwatch --once until predicate(lines) holds; returns the last lines."""
-    deadline = time.monotonic() + timeout
-    lines: List[dict] = []
-    while time.monotonic() < deadline:
-        _, lines, _ = watch_once(stepwatch_bin, domain, *extra, wait_ms=3000)
-        if predicate(lines):
-            return lines
-        time.sleep(0.3)
-    pytest.fail(f"stepwatch never showed the expected state within {timeout} s; last: {lines}", pytrace=False)
-
-
-def node_line(lines: List[dict], node: int) -> Optional[dict]:
-    return next((l for l in lines if l["type"] == "node" and l["node"] == node), None)
-
-
-def axis_line(lines: List[dict], node: int, axis: int) -> Optional[dict]:
-    return next((l for l in lines if l["type"] == "axis" and l["node"] == node and l["axis"] == axis), None)
-
-
 def operational_with_axis(lines: List[dict]) -> bool:
     n = node_line(lines, NODE)
     a = axis_line(lines, NODE, 1)
     return bool(n and n["state"] == "OPERATIONAL" and a and a["status"])
 
 
-class LiveWatch:
-    """stepwatch --json streaming every sample to a file until stopped."""
-
-    def __init__(self, stepwatch_bin: Path, domain: int, path: Path, *extra: str):
-        self.path = path
-        with open(path, "wb") as f:
-            self.proc = subprocess.Popen([str(stepwatch_bin), "--json", "--domain", str(domain), *extra],
-                                         stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT)
-
-    def stop(self) -> List[dict]:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGTERM)
-            self.proc.wait(5)
-        return [json.loads(l) for l in self.path.read_text().splitlines() if l.startswith("{")]
-
-
 def test_bridge_publishes_a_move_and_a_late_joiner_gets_the_final_status(
         master, start_node, start_bridge, stepwatch_bin, node_config, domain, tmp_path):
-    start_bridge(domain)
+    start_bridge()
     live = LiveWatch(stepwatch_bin, domain, tmp_path / "live.jsonl")
     link = boot(master, start_node, NODE, ["--config", node_config])
     ax = link.axes[1]
@@ -172,8 +79,8 @@ def test_bridge_publishes_a_move_and_a_late_joiner_gets_the_final_status(
 
 def test_cyclone_dds_subscriber_receives_status_and_position(
         master, start_node, start_bridge, domain, node_config, tmp_path):
-    cyclone = _bin("CYCLONE_SUB_BIN", "build/bridge/interop/cyclone_sub")
-    start_bridge(domain)
+    cyclone = cyclone_sub_bin()
+    start_bridge()
     link = boot(master, start_node, NODE, ["--config", node_config])
     ax = link.axes[1]
     clear_and_profile(ax)
@@ -197,7 +104,7 @@ def test_cyclone_dds_subscriber_receives_status_and_position(
 
 def test_killed_node_turns_lost_and_its_axes_are_disposed_then_it_is_rediscovered(
         master, start_node, start_bridge, stepwatch_bin, node_config, domain, tmp_path):
-    start_bridge(domain)
+    start_bridge()
     node = start_node(NODE, ["--config", node_config])
     master.nmt_start(NODE)
     wait_for_snapshot(stepwatch_bin, domain, operational_with_axis)
@@ -219,20 +126,19 @@ def test_killed_node_turns_lost_and_its_axes_are_disposed_then_it_is_rediscovere
 
 def test_bridge_restart_recovers_without_restarting_the_node(
         master, start_node, start_bridge, stepwatch_bin, node_config, domain):
-    first = start_bridge(domain)
+    first = start_bridge()
     start_node(NODE, ["--config", node_config])
     master.nmt_start(NODE)
     wait_for_snapshot(stepwatch_bin, domain, operational_with_axis)
-    first.send_signal(signal.SIGTERM)
-    assert first.wait(5) == 0
+    assert first.terminate() == 0
     rc, lines, _ = watch_once(stepwatch_bin, domain, wait_ms=1500)
     assert not [l for l in lines if l["type"] == "axis"], f"axes of a stopped bridge still alive: {lines}"
-    start_bridge(domain)  # the node keeps running: found again by its heartbeat
+    start_bridge()  # the node keeps running: found again by its heartbeat
     wait_for_snapshot(stepwatch_bin, domain, operational_with_axis)
 
 
 def test_ros2_names(master, start_node, start_bridge, stepwatch_bin, node_config, domain):
-    start_bridge(domain, "--ros2", "--ros2-prefix", "cell4")
+    start_bridge("--ros2", "--ros2-prefix", "cell4")
     start_node(NODE, ["--config", node_config])
     master.nmt_start(NODE)
     wait_for_snapshot(stepwatch_bin, domain, operational_with_axis, extra=("--ros2", "--ros2-prefix", "cell4"))
@@ -259,7 +165,7 @@ def test_two_nodes_with_three_axes_each_are_all_published(
         master, start_node, start_bridge, stepwatch_bin, domain, tmp_path):
     config = tmp_path / "three-axes.toml"
     config.write_text('axes = 3\n[defaults]\n"1017" = 200\n')
-    start_bridge(domain)
+    start_bridge()
     for node in (NODE, NODE + 1):
         start_node(node, ["--config", config])
     master.nmt_start(0)  # all nodes

@@ -3,48 +3,32 @@ still listed in NodeHealth with its NMT state, and has no axes."""
 
 from __future__ import annotations
 
-import time
-
 from axis_helpers import HeartbeatSender
-from bridge_helpers import DDS_TIMEOUT, domain, start_bridge, stepwatch_once
+from bridge_helpers import DDS_TIMEOUT, domain, node_line, start_bridge, stepbridge_bin, stepwatch_bin, wait_for_snapshot
 
-_ = (domain, start_bridge)  # fixtures
-
-
-def node_row(rows, node) -> dict:
-    """The node's row, or {} while there is none."""
-    return next((r for r in rows if r.get("type") == "node" and r["node"] == node), {})
+_ = (domain, start_bridge, stepbridge_bin)  # fixtures
 
 
-def axis_rows(rows, node):
-    return [r for r in rows if r.get("type") == "axis" and r["node"] == node]
+def node_row(lines, node) -> dict:
+    """The node's line, or {} while there is none."""
+    return node_line(lines, node) or {}
 
 
-def wait_rows(domain, pred, what, timeout=DDS_TIMEOUT):
-    deadline = time.monotonic() + timeout
-    rows = []
-    while time.monotonic() < deadline:
-        rows = stepwatch_once(domain, wait_ms=2000, allow_empty=True)
-        if pred(rows):
-            return rows
-        time.sleep(0.3)
-    raise AssertionError(f"stepwatch: {what} not seen within {timeout} s; last rows: {rows}")
-
-
-def test_a_device_that_is_not_a_stepnode_is_listed_with_its_state(master, start_bridge, domain):
+def test_a_device_that_is_not_a_stepnode_is_listed_with_its_state(master, start_bridge, stepwatch_bin, domain):
     start_bridge()
     other = 0x33
     # A device that answers no SDO at all (a simple I/O module, say): a boot-up, then
-    # heartbeats. It is listed, as no stepnode and with no axes; its discovery failing over
-    # and over is counted, never fatal.
+    # heartbeats. It is listed, as no stepnode and with no axes.
     master.send(0x700 + other, b"\x00")
     beat = HeartbeatSender(node=other, period=0.2).start()
     try:
-        rows = wait_rows(domain, lambda r: node_row(r, other).get("state") == "OPERATIONAL",
-                         f"node {other} OPERATIONAL")
+        rows = wait_for_snapshot(stepwatch_bin, domain, lambda r: node_row(r, other).get("state") == "OPERATIONAL",
+                                 timeout=DDS_TIMEOUT)
         n = node_row(rows, other)
-        assert not n["is_stepnode"] and not axis_rows(rows, other), n
-        rows = wait_rows(domain, lambda r: node_row(r, other).get("sdo_failures", 0) >= 1, "an SDO failure counted")
+        assert not n["is_stepnode"] and not [l for l in rows if l["type"] == "axis" and l["node"] == other], n
+        # Its discovery fails over and over: counted (and retried), never fatal.
+        wait_for_snapshot(stepwatch_bin, domain, lambda r: node_row(r, other).get("sdo_failures", 0) >= 1,
+                          timeout=DDS_TIMEOUT)
     finally:
         beat.close()
-    rows = wait_rows(domain, lambda r: node_row(r, other).get("state") == "LOST", f"node {other} LOST")
+    wait_for_snapshot(stepwatch_bin, domain, lambda r: node_row(r, other).get("state") == "LOST", timeout=DDS_TIMEOUT)
