@@ -231,9 +231,9 @@ void HpService::publish(unsigned a) {
 
 void HpService::advance(uint64_t now_us) {
   now_us_ = now_us;
-  motion_.advance(now_us);  // the clock's epoch, and every axis to now
+  motion_.advance_axes(now_us);  // the clock's epoch, and every axis to now
   for (auto& ch : channels_) ch->advance(now());
-  motion_.advance(now_us);  // publishes what the channels started or stopped
+  motion_.advance(now_us);  // publishes the axes once, with what the channels started or stopped
   for (unsigned a = 0; a < channels_.size(); ++a) publish(a);
 }
 

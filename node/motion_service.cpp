@@ -154,16 +154,18 @@ void MotionService::on_axis_event(unsigned a, const motion::AxisEvent& e) {
   }
 }
 
-void MotionService::advance(uint64_t now_us) {
+void MotionService::advance_axes(uint64_t now_us) {
   if (!epoch_set_) {
     epoch_us_ = now_us;
     epoch_set_ = true;
   }
   now_us_ = now_us;
-  for (unsigned a = 0; a < count_; ++a) {
-    axes_[a]->advance_to(ticks(now_us));
-    publish(a);
-  }
+  for (auto& axis : axes_) axis->advance_to(ticks(now_us));
+}
+
+void MotionService::advance(uint64_t now_us) {
+  advance_axes(now_us);
+  for (unsigned a = 0; a < count_; ++a) publish(a);
   for (unsigned m = 0; m < motors_; ++m) publish_motor(m);
 }
 

@@ -22,6 +22,8 @@ class MotionService {
 
   // Brings every axis up to `now_us` (CLOCK_MONOTONIC or virtual) and publishes.
   void advance(uint64_t now_us);
+  // The same without publishing, for a caller that acts on the axes and then advances.
+  void advance_axes(uint64_t now_us);
   // Power-up / NMT reset node: axes back to the power-up state, settings reloaded.
   void power_up(uint64_t now_us);
   // Heartbeat consumer timeout: every moving axis ramps down, %I8 latches.

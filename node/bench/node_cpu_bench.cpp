@@ -1,6 +1,7 @@
 // The node's CPU share while three axes each run at 245,730 steps/s in real time: the real
-// CanopenNode + MotionService, ticked every 1 ms on CLOCK_MONOTONIC exactly as the process
-// does (no CAN socket: frames go to a counter). Prints the figures; asserts nothing.
+// CanopenNode + MotionService + HpService wired as node/main.cpp wires them, ticked every
+// 1 ms on CLOCK_MONOTONIC exactly as the process does (no CAN socket: frames go to a
+// counter). Prints the figures; asserts nothing.
 //   build/node/node_cpu_bench [--seconds 10] [--tick-us 1000]
 #include <sys/resource.h>
 #include <time.h>
@@ -11,6 +12,7 @@
 #include <filesystem>
 
 #include "node/canopen_node.hpp"
+#include "node/hp_service.hpp"
 #include "node/motion_service.hpp"
 #include "od/axis_objects.hpp"
 
@@ -53,8 +55,9 @@ int main(int argc, char** argv) {
   uint64_t frames = 0;
   node::CanopenNode canopen(options, [&frames](const od::CanFrame&) { ++frames; });
   node::MotionService motion(canopen.dictionary(), options.device, canopen.emcy());
-  canopen.on_advance = [&motion](uint64_t t) { motion.advance(t); };
-  canopen.on_reset_application = [&motion](uint64_t t) { motion.power_up(t); };
+  node::HpService hp(canopen.dictionary(), options.device, motion, canopen.emcy());
+  canopen.on_advance = [&hp](uint64_t t) { hp.advance(t); };
+  canopen.on_reset_application = [&hp](uint64_t t) { hp.power_up(t); };
   uint64_t t0 = now_us();
   canopen.start(t0);
   canopen.on_frame(od::CanFrame(0, {0x01, 0}), t0);  // NMT start: TPDOs flow as on a bus
