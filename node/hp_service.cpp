@@ -54,6 +54,7 @@ HpService::HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, Mot
 
 SdoAbort HpService::result(unsigned a, hp::Error e) {
   if (e == hp::Error::None) return SdoAbort::None;
+  if (e == hp::Error::ValueOutOfRange) return SdoAbort::InvalidValue;  // no HP error number
   uint8_t n = static_cast<uint8_t>(e);
   emcy_.report(static_cast<uint16_t>(od::kHpErrorEmcyBase + n), error_bits::kManufacturer,
                {n, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);

@@ -78,6 +78,7 @@ class Axis {
   bool external_job() const { return job_ == Job::External; }
   void start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
   void external_velocity(Tick now, int64_t level) { generator_.change_velocity(now, level); }
+  void external_regrid(Tick now, const RampSpec& ramp) { generator_.regrid(now, ramp); }
   void external_stop(Tick now) { generator_.stop(now); }
   void external_halt(Tick now);  // no ramp, no end report: the front end knows why
   const StepGenerator& generator() const { return generator_; }

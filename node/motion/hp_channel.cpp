@@ -147,6 +147,11 @@ Error Channel::sustain(double value, bool nowait, Tick now) {
   if (value != 0)
     if (Error e = check_can_move(true); e != Error::None) return accept(e);
   double rate = profile_.mode == ProfileMode::Freq ? position_.to_steps(value) : value;
+  // Appendix A: a rate resolved to 2.5 µHz. What the profile's clamp leaves of a rate
+  // finer than that (a 0 minimum lets 1E-12 through) is refused, not handed to the engine.
+  if (!std::isfinite(rate) ||
+      (profile_.mode == ProfileMode::Freq && rate != 0 && clamp_to_profile(profile_, std::fabs(rate)) < kRateResolutionHz))
+    return Error::ValueOutOfRange;
   // "A running SUSTAIN command must be stopped with HALT or SUSTAIN 0 before a command to
   // reverse direction can be executed" (error 91).
   if (run_ == Run::Sustain && rate != 0 && (rate > 0 ? +1 : -1) != direction_)
@@ -266,7 +271,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_target_ = target;
     } else {
       sustain_rate_ = target;
-      axis_.external_velocity(at, level_of(axis_.generator().ramp(), target));
+      axis_.external_velocity(at, sustain_level(target, at));
     }
     return;
   }
@@ -290,6 +295,19 @@ void Channel::start_sustain_rate(double rate, Tick at) {
     sustain_rate_ = target;
     axis_.start_external(freq_ramp(profile_, target), dir, std::nullopt, at);
   }
+}
+
+int64_t Channel::sustain_level(double target, Tick at) {
+  // The running ramp's levels were sized for the first SUSTAIN rate. When they are much
+  // finer than a ramp made for the new rate would use (SUSTAIN 2.5E-6 then SUSTAIN 100:
+  // 4e7 levels of one tick each, minutes of CPU), the motion moves to the new rate's grid
+  // first; otherwise it stays on its grid (as before: exact to half a level). A rate
+  // below one level of a coarse grid holds one level (StepGenerator::change_velocity).
+  const RampSpec fresh = freq_ramp(profile_, target);
+  const RampSpec& running = axis_.generator().ramp();
+  if (running.phase_per_step <= 16 * fresh.phase_per_step) return level_of(running, target);
+  axis_.external_regrid(at, fresh);
+  return fresh.run_level;
 }
 
 void Channel::halt_sgl(Tick now) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 
 namespace stepnode::motion::hp {
@@ -14,8 +15,10 @@ Conflict check_profile(const Profile& p) {
   if (!(p.min >= 0 && p.max >= 0 && p.slope >= 0 && p.last >= 0) || p.min > top || p.max > top ||
       p.slope > top_slope || (p.slope > 0 && p.slope < finest_slope))
     return Conflict::OutOfRange;
-  if (freq ? (p.last < kTimeResolutionS || p.last > kMaxWidthS) : (p.last <= 0 || p.last > kMaxWidthS))
+  if (freq ? (p.last < kTimeResolutionS || p.last > kMaxWidthS) : (p.last < kMinPeriodS || p.last > kMaxWidthS))
     return Conflict::OutOfRange;
+  auto finer_than_resolution = [](double hz) { return hz > 0 && hz < kRateResolutionHz; };
+  if (freq && (finer_than_resolution(p.min) || finer_than_resolution(p.max))) return Conflict::OutOfRange;
   if (p.min > p.max) return Conflict::MinAboveMax;
   if (p.min == 0 && p.max == 0 && p.slope == 0) return Conflict::AllZero;
   if (p.min == 0 && p.slope == 0) return Conflict::MinZeroSlopeZero;
@@ -73,6 +76,10 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * per_hz);
   r.min_creep_level = std::max<int64_t>({int64_t{1}, r.base_level, one_step});
   r.horner_triangle_rule = false;
+  // The engine's invariants (checked in the sanitizer build): every rate the PROFILE and
+  // SUSTAIN checks accept gives a positive step size far from int64 overflow.
+  assert(r.phase_per_step > 0 && r.phase_per_step < (int64_t{1} << 52));
+  assert(r.base_level >= 0 && r.base_level <= r.run_level + 1 && r.min_creep_level >= 1);
   return r;
 }
 

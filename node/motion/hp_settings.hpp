@@ -25,6 +25,10 @@ enum class Error : uint8_t {
   NotValidInWidthMode = 92,
   TestJumperSet = 93,
   CannotMoveWhileStandbyOn = 94,
+  // Not an HP error number: a value outside appendix A's specifications (a SUSTAIN rate
+  // finer than the 2.5 µHz resolution). The command is refused and nothing changes; on the
+  // bus it is the SDO range abort, and 0x2n19 keeps the last HP error.
+  ValueOutOfRange = 255,
 };
 
 // Which row of the PROFILE settings-conflict tables (3-9 FREQ, 3-26 WIDTH) a PROFILE hit.
@@ -70,6 +74,11 @@ constexpr double kMaxWidthSlope = 1.0;  // s/s
 constexpr double kSlopeResolutionHzPerS = 25e-3;
 constexpr double kWidthSlopeResolution = 1e-6;  // s/s
 constexpr double kTimeResolutionS = 1e-6;
+// "Pulse Rate ... Resolution 2.5 µHz": a rate above 0 but finer is out of range (a SUSTAIN
+// of 1E-12 overflowed the engine's phase arithmetic). And 10 kHz at most: a WIDTH period
+// under 100 µs is out of range too.
+constexpr double kRateResolutionHz = 2.5e-6;
+constexpr double kMinPeriodS = 1.0 / kMaxPulseRateHz;
 constexpr uint16_t kMaxDelayMs = 65'535;  // DELAY 0.000..65.535 s in 1 ms steps (3-14)
 
 }  // namespace stepnode::motion::hp

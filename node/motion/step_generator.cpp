@@ -216,7 +216,9 @@ namespace stepnode::motion {
 void StepGenerator::change_velocity(Tick at, int64_t level) {
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);
-  level = std::max(level, ramp_.base_level);
+  // Never below one level: at level 0 the motion would stand still for ever and the next
+  // step's time divides by the level (a 0 Hz minimum makes base_level 0).
+  level = std::max({level, ramp_.base_level, int64_t{1}});
   if (level > level_) {
     // Intervals at level+1 .. target, Z_A each (the same convention as a start).
     peak_level_ = level;
@@ -235,6 +237,21 @@ void StepGenerator::change_velocity(Tick at, int64_t level) {
   } else if (phase_ != MotionPhase::Running) {
     phase_ = MotionPhase::Running;  // already there: hold it
   }
+}
+
+void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
+  if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
+  advance_to(at);
+  const __int128 d_old = ramp_.phase_per_step, d_new = ramp.phase_per_step;
+  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * d_new / d_old);
+  level_ = std::max<int64_t>(1, static_cast<int64_t>((static_cast<__int128>(level_) * d_new + d_old / 2) / d_old));
+  ramp_ = ramp;
+  phase_ = MotionPhase::Running;
+  holding_ = false;
+  peak_level_ = level_;
+  decel_floor_ = ramp_.base_level;
+  interval_index_ = 0;
+  interval_end_ = t_;
 }
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {

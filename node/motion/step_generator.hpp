@@ -36,6 +36,12 @@ class StepGenerator {
   // destination: HP SUSTAIN, velocity modes). Up with the acceleration, down with the
   // deceleration of the ramp; never below the base level.
   void change_velocity(Tick at, int64_t level);
+  // From time `at`, carries a motion without a destination over to `ramp`'s level grid:
+  // the velocity to the nearest level of the new grid (at least 1), the phase accumulator
+  // keeps its fraction of a step, the motion runs on at that level. For velocity changes
+  // the current grid cannot express: an HP SUSTAIN from a few µHz (levels of µHz) up to
+  // kHz would take one level per tick, hundreds of millions of them.
+  void regrid(Tick at, const RampSpec& ramp);
   // From time `at`, end the move `steps` steps from here and decelerate with `ramp`'s
   // deceleration (indexed move: the index input moved the end point). The velocity and
   // phase carry on; if the new end is too close to ramp down, the ramp starts at once.

@@ -262,6 +262,35 @@ TEST_F(HpBus, AMoveOfMoreThanTheModulesPulsesIsARangeAbort) {
   EXPECT_EQ(get(index(0, kPosition)), 5.0);
 }
 
+TEST_F(HpBus, ASustainFinerThanTheRateResolutionIsARangeAbortAndNothingMoves) {
+  // Appendix A "Pulse Rate ... Resolution 2.5 µHz". SUSTAIN 1E-12 NOWAIT (power-on
+  // PROFILE: min 0, so the clamp let it through) overflowed freq_ramp's llround: the
+  // motor jumped to the simulated limit within a tick, or with no limits the node spun.
+  constexpr uint32_t kRange = 0x06090030;
+  EXPECT_EQ(sustain(1e-12, true), kRange);
+  // PSCALE 1E12; SUSTAIN 1 is 1e-12 pulses/s too.
+  ASSERT_EQ(put(index(0, kPscale), 0, 1e12), 0u);
+  EXPECT_EQ(sustain(1, true), kRange);
+  ASSERT_EQ(put(index(0, kPscale), 0, 1), 0u);
+  wait_s(1);
+  EXPECT_EQ(mechanical(), 0);
+  EXPECT_EQ(done(), 0);
+  EXPECT_EQ(error(), 0);  // not an HP error number: 0x2n19 is unchanged
+  // At the resolution the SUSTAIN is legal (one pulse in 4.6 days) and the node serves on.
+  EXPECT_EQ(sustain(2.5e-6, true), 0u);
+  wait_s(1);
+  EXPECT_LT(done(), 0);
+  EXPECT_EQ(mechanical(), 0);
+  // From there to 100 pulses/s ramps at the PROFILE's 500 Hz/s (0.2 s), not one µHz level
+  // per tick for minutes of CPU.
+  EXPECT_EQ(sustain(100, true), 0u);
+  wait_s(1.2);
+  EXPECT_EQ(done(), -1);
+  int32_t p0 = mechanical();
+  wait_s(1);
+  EXPECT_NEAR(mechanical() - p0, 100, 1);
+}
+
 TEST_F(HpBus, ProfileConflictsAndErrorNumbersAreAborts) {
   EXPECT_EQ(profile(0, 500, 100, 200, 2e-3), kIncompatible);
   EXPECT_EQ(*sdo_read(index(0, kConflict), 0), 5u);

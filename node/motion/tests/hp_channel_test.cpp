@@ -115,6 +115,52 @@ TEST_F(HpChannel, ProfileFreqSettingConflictsAreTheTablesRows) {
   EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, .1e-3), now), Conflict::None);
 }
 
+TEST_F(HpChannel, AppendixAPulseRateResolutionAndMaximumBoundTheRates) {
+  // "Pulse Rate: maximum 10 kHz, resolution 2.5 µHz". A FREQ min or max above 0 but finer
+  // than the resolution is out of range, as is a WIDTH period under 100 µs (above 10 kHz).
+  EXPECT_EQ(ch->profile(freq(1e-7, 800, 200, 25e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(freq(0, 1e-7, 200, 25e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(freq(2.5e-6, 800, 200, 25e-6), now), Conflict::None);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 99e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 1e-300), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 100e-6), now), Conflict::None);
+  // A SUSTAIN whose clamped rate is finer than 2.5 µHz is refused and changes nothing
+  // (SUSTAIN 1E-12 overflowed freq_ramp's llround: the motor ran away).
+  ASSERT_EQ(ch->profile(freq(0, 800, 200, 25e-6), now), Conflict::None);
+  EXPECT_EQ(ch->sustain(1e-12, true, now), Error::ValueOutOfRange);
+  EXPECT_EQ(ch->sustain(-2e-6, true, now), Error::ValueOutOfRange);
+  EXPECT_EQ(ch->sustain(std::nan(""), true, now), Error::ValueOutOfRange);
+  EXPECT_EQ(ch->last_error(), Error::None);
+  wait(1000);
+  EXPECT_EQ(position(), 0);
+  EXPECT_EQ(done(), 0);
+  // At the resolution it runs (one pulse in 4.6 days). A change to 800 Hz moves the
+  // motion onto a grid for 800 Hz: it ramps at the slope, not one µHz level per tick.
+  EXPECT_EQ(ch->sustain(2.5e-6, true, now), Error::None);
+  wait(1000);
+  EXPECT_LT(done(), 0);
+  EXPECT_EQ(position(), 0);
+  EXPECT_EQ(ch->sustain(800, true, now), Error::None);
+  wait(4100);  // (800 - 0) / 200 Hz/s = 4 s
+  EXPECT_EQ(done(), -1);
+  EXPECT_NEAR(axis->velocity(), 800, 800 * 1e-6);
+  // Down to a rate below one level of that grid (levels of slope / 76,800 = 2.6 mHz): it
+  // holds one level, never level 0 (its step time divided by the level).
+  EXPECT_EQ(ch->sustain(1e-5, true, now), Error::None);
+  wait(4100);
+  int64_t held = position();
+  wait(2000);
+  EXPECT_LE(position() - held, 1);  // at most one level (2.6 mHz): a step in 380 s
+  EXPECT_TRUE(axis->busy());
+  ch->halt_sgl(now);
+  // With a minimum the clamp lifts a tiny rate to it, as the manual says (3-12).
+  ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
+  int64_t before = position();
+  EXPECT_EQ(ch->sustain(1e-12, true, now), Error::None);
+  wait(1000);
+  EXPECT_NEAR(position() - before, 100, 1);
+}
+
 TEST_F(HpChannel, ProfileWidthSettingConflictsAreTheTablesRows) {
   EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 0, .1e-3), now), Conflict::SlopeZeroRangeUnattainable);
   EXPECT_EQ(ch->profile(width(0, 10e-6, 0, .1e-3), now), Conflict::MinZeroSlopeZero);
