@@ -2,7 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "od/eds.hpp"
+#include "od/pdo_mapping.hpp"
 
 namespace stepnode::node {
 namespace {
@@ -92,19 +95,47 @@ void CanopenNode::install_service_hooks() {
 
 void CanopenNode::start(uint64_t now_us) { initialise(true, now_us); }
 
+void CanopenNode::report_at_power_up(uint16_t code, std::array<uint8_t, 5> manufacturer) {
+  power_up_errors_.push_back({code, manufacturer});
+}
+
+void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us) {
+  ParameterStore::LoadReport report = store_.load_into_dictionary(first, last);
+  // Stored mappings skip the mapping procedure: one naming an object this device does not
+  // have (saved with two axes, started with one) is put back to its default record.
+  for (unsigned n = 0; n < od::pdo_count(options_.device); ++n)
+    for (unsigned base : {0x1600u, 0x1A00u}) {
+      const auto index = static_cast<uint16_t>(base + n);
+      od::SdoAbort a = od::check_mapping_record(dictionary_, index);
+      if (a == od::SdoAbort::None) continue;
+      spdlog::warn("stored PDO mapping {:04X} is not valid ({}); default mapping kept", index, od::abort_text(a));
+      dictionary_.reset_to_defaults(index, index);
+      report.refuse({index, 0});
+    }
+  emcy_.reset();
+  if (!report.problem()) return;
+  // Manufacturer bytes: the first refused entry (index little-endian, sub), how many were
+  // refused (at most 255), 1 if the whole file was damaged and set aside.
+  ParameterStore::Key key = report.first_refused.value_or(ParameterStore::Key{0, 0});
+  emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
+               {static_cast<uint8_t>(key.first), static_cast<uint8_t>(key.first >> 8), key.second,
+                static_cast<uint8_t>(std::min(report.refused, 255u)), static_cast<uint8_t>(report.set_aside ? 1 : 0)},
+               now_us);
+}
+
 void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   // Reset application: every parameter back to its stored value (or default); reset
   // communication: only 0x1000-0x1FFF (CiA 301 7.3.2.2.1).
   state_ = NmtState::Initialising;
+  emcy_.set_enabled(false);  // nothing but the boot-up message before pre-operational
   pdo_.reset();
   sdo_.reset();
   if (reset_application) {
-    store_.load_into_dictionary(0x1000, 0x9FFF);
-    emcy_.reset();
+    load_parameters(0x1000, 0x9FFF, now_us);
+    for (const auto& e : power_up_errors_) emcy_.report(e.code, error_bits::kGeneric, e.manufacturer, now_us);
     if (on_reset_application) on_reset_application(now_us);
   } else {
-    store_.load_into_dictionary(0x1000, 0x1FFF);
-    emcy_.reset();
+    load_parameters(0x1000, 0x1FFF, now_us);
   }
   pdo_.mark_dirty();
   consumer_.reset();

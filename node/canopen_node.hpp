@@ -41,6 +41,10 @@ class CanopenNode {
   void on_tick(uint64_t now_us);
   void on_bus_event(BusEvent event, uint64_t now_us);
 
+  // An error the device found before it could talk (a configured value it refused): sent
+  // as EMCY after every power-up and reset node, since the configuration stays the same.
+  void report_at_power_up(uint16_t code, std::array<uint8_t, 5> manufacturer);
+
   NmtState state() const { return state_; }
   uint8_t node_id() const { return options_.device.node_id; }
   od::Dictionary& dictionary() { return dictionary_; }
@@ -61,6 +65,7 @@ class CanopenNode {
  private:
   void install_service_hooks();
   void initialise(bool reset_application, uint64_t now_us);
+  void load_parameters(uint16_t first, uint16_t last, uint64_t now_us);
   void enter(NmtState state, uint64_t now_us);
   void handle_nmt(NmtCommand command, uint64_t now_us);
   void send(const od::CanFrame& frame) { send_(frame); }
@@ -77,6 +82,11 @@ class CanopenNode {
   od::SdoServer sdo_;
   NmtState state_ = NmtState::Initialising;
   std::vector<od::CanFrame> sdo_out_;
+  struct PowerUpError {
+    uint16_t code;
+    std::array<uint8_t, 5> manufacturer;
+  };
+  std::vector<PowerUpError> power_up_errors_;
 };
 
 }  // namespace stepnode::node

@@ -4,7 +4,10 @@
 #include <toml++/toml.h>
 
 #include <cstdlib>
+#include <map>
 #include <sstream>
+
+#include "od/pdo_mapping.hpp"
 
 namespace stepnode::node {
 namespace {
@@ -25,7 +28,7 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
     t = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
     std::ostringstream msg;
-    msg << "config " << path << ": " << e.description();
+    msg << "config " << path << ": " << one_line(e.description());
     if (e.source().begin) msg << " (line " << e.source().begin.line << ")";
     throw UsageError(msg.str());
   }
@@ -87,6 +90,22 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
 
 }  // namespace
 
+std::string one_line(std::string_view text) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (c == '\n' || c == '\r' || c == '\t') {
+      out += ' ';
+    } else if (c < 0x20 || c >= 0x7F) {
+      char esc[8];
+      std::snprintf(esc, sizeof esc, "\\x%02X", c);
+      out += esc;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
   NodeConfig cfg;
   exit_now = false;
@@ -134,8 +153,11 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   return cfg;
 }
 
-void apply_object_defaults(od::Dictionary& od,
-                           const std::vector<std::pair<std::string, std::string>>& defaults) {
+std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
+                                                  const std::vector<std::pair<std::string, std::string>>& defaults) {
+  // The built-in records of the mappings the file touches, to go back to.
+  std::map<uint16_t, std::map<uint8_t, od::Bytes>> built_in;
+  auto is_mapping = [](unsigned i) { return (i >= 0x1600 && i <= 0x17FF) || (i >= 0x1A00 && i <= 0x1BFF); };
   for (const auto& [key, text] : defaults) {
     unsigned index = 0, sub = 0;
     char extra = 0;
@@ -153,9 +175,23 @@ void apply_object_defaults(od::Dictionary& od,
     }
     if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
       throw UsageError("defaults: " + key + " = " + text + ": " + std::string(od::abort_text(a)));
+    if (is_mapping(index) && !built_in.count(static_cast<uint16_t>(index)))
+      for (const auto& [sub_index, entry] : od.object(static_cast<uint16_t>(index))->entries)
+        built_in[static_cast<uint16_t>(index)][sub_index] = entry.default_value;
     e->default_value = value;
     e->value = value;
   }
+  std::vector<RefusedMapping> refused;
+  for (const auto& [index, record] : built_in) {
+    od::SdoAbort a = od::check_mapping_record(od, index);
+    if (a == od::SdoAbort::None) continue;
+    for (const auto& [sub, value] : record) {
+      od::Entry& e = od.object(index)->entries.at(sub);
+      e.default_value = e.value = value;
+    }
+    refused.push_back({index, a});
+  }
+  return refused;
 }
 
 }  // namespace stepnode::node

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "node/canopen_node.hpp"
@@ -29,9 +30,24 @@ struct UsageError : std::runtime_error {
 // (the text is printed). Throws UsageError with one clear line on bad input.
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code);
 
+// `text` as one printable line: line breaks and tabs become spaces, other control bytes
+// and bytes outside ASCII become \xNN (toml++ copies the offending bytes of a file into
+// its message; stderr gets one line whatever the file held).
+std::string one_line(std::string_view text);
+
+// A PDO mapping record the configuration set to something the mapping procedure refuses
+// (e.g. "1A00:1" = 0x99990020 names an object this device does not have).
+struct RefusedMapping {
+  uint16_t index = 0;
+  od::SdoAbort reason = od::SdoAbort::None;
+};
+
 // Applies object_defaults to the dictionary's default values. Throws UsageError naming the
-// object when one does not exist, is not writable or does not fit its type.
-void apply_object_defaults(od::Dictionary& dictionary,
-                           const std::vector<std::pair<std::string, std::string>>& defaults);
+// object when one does not exist, is not writable or does not fit its type: the file is
+// wrong on its face. A mapping record whose entries each fit but which, as a whole, the
+// device cannot use keeps its built-in default and is returned: the node starts and says
+// so (EMCY 0x6100), as it does for such a stored mapping.
+std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& dictionary,
+                                                  const std::vector<std::pair<std::string, std::string>>& defaults);
 
 }  // namespace stepnode::node

@@ -26,6 +26,8 @@ constexpr uint8_t kManufacturer = 0x80;
 // Emergency error codes this device raises (CiA 301 table 21).
 namespace emcy_code {
 constexpr uint16_t kNoError = 0x0000;
+constexpr uint16_t kDataStorage = 0x5530;   // stored parameters damaged or refused
+constexpr uint16_t kSoftware = 0x6100;      // internal software: a configured value refused
 constexpr uint16_t kCanOverrun = 0x8110;
 constexpr uint16_t kCanErrorPassive = 0x8120;
 constexpr uint16_t kHeartbeatError = 0x8130;

@@ -50,7 +50,13 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
 int run(const node::NodeConfig& cfg) {
   canio::SocketCan can(cfg.iface);
   node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
-  node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults);
+  for (const auto& r : node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults)) {
+    spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
+                 r.index, od::abort_text(r.reason));
+    // EMCY 0x6100 after boot-up, manufacturer bytes: the record's index, little-endian.
+    canopen.report_at_power_up(node::emcy_code::kSoftware,
+                               {static_cast<uint8_t>(r.index), static_cast<uint8_t>(r.index >> 8), 0, 0, 0});
+  }
   node::MotionService motion(canopen.dictionary(), cfg.options.device, canopen.emcy());
   // The HP 44714A channels drive the same axes; their service advances both.
   node::HpService hp(canopen.dictionary(), cfg.options.device, motion, canopen.emcy());
@@ -106,17 +112,17 @@ int main(int argc, char** argv) {
     if (cfg.print_eds) {
       od::Dictionary dictionary;
       od::build_device_dictionary(dictionary, cfg.options.device);
-      node::apply_object_defaults(dictionary, cfg.object_defaults);
+      (void)node::apply_object_defaults(dictionary, cfg.object_defaults);  // refused: built-in kept
       std::cout << od::write_eds(dictionary, cfg.options.device);
       return 0;
     }
     return run(cfg);
   } catch (const node::UsageError& e) {
-    std::fprintf(stderr, "stepnode: %s\n", e.what());
+    std::fprintf(stderr, "stepnode: %s\n", node::one_line(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
     // The interface missing or not a CAN device is bad input too: one line, status 2.
-    std::fprintf(stderr, "stepnode: %s\n", e.what());
+    std::fprintf(stderr, "stepnode: %s\n", node::one_line(e.what()).c_str());
     return 2;
   }
 }

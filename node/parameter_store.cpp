@@ -12,8 +12,25 @@
 namespace stepnode::node {
 namespace {
 
-// One line per entry: "IIII:SS HEXBYTES" (index, sub-index, value bytes in hex).
-constexpr const char* kHeader = "# stepnode stored parameters v1";
+// One line per entry: "IIII:SS HEXBYTES" (index, sub-index, value bytes in hex), between
+// the header and the checksum line.
+constexpr std::string_view kHeaderV1 = "# stepnode stored parameters v1";
+constexpr std::string_view kHeader = "# stepnode stored parameters v2";
+constexpr std::string_view kCrcPrefix = "# crc32 ";
+
+// CRC-32 (IEEE 802.3, reflected 0xEDB88320): the file is small and read once per reset.
+uint32_t crc32(std::string_view text) {
+  uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char c : text) {
+    crc ^= c;
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+std::string with_suffix(const std::filesystem::path& p, const std::string& suffix) {
+  return p.string() + suffix;
+}
 
 std::string to_hex(const od::Bytes& bytes) {
   static const char* digits = "0123456789abcdef";
@@ -53,13 +70,32 @@ bool write_all(int fd, const std::string& data) {
 ParameterStore::ParameterStore(od::Dictionary& dictionary, std::filesystem::path file)
     : dictionary_(dictionary), file_(std::move(file)) {}
 
-std::map<ParameterStore::Key, od::Bytes> ParameterStore::read_file() const {
-  std::map<Key, od::Bytes> values;
-  std::ifstream in(file_);
-  if (!in) return values;  // first start: nothing stored
+ParameterStore::Contents ParameterStore::read_file() const {
+  Contents out;
+  std::ifstream in(file_, std::ios::binary);
+  if (!in) return out;  // first start: nothing stored
+  std::stringstream whole;
+  whole << in.rdbuf();
+  const std::string text = whole.str();
+  // Version 2 ends with the checksum of everything before its line; version 1 has none.
+  std::string_view body = text;
+  const bool v1 = body.starts_with(kHeaderV1) && body.size() > kHeaderV1.size() && body[kHeaderV1.size()] == '\n';
+  if (!v1) {
+    const size_t last = body.rfind(kCrcPrefix);
+    unsigned stored = 0;
+    char tail = 0;
+    if (!body.starts_with(kHeader) || last == std::string_view::npos ||
+        std::sscanf(text.c_str() + last + kCrcPrefix.size(), "%8x%c", &stored, &tail) != 2 || tail != '\n' ||
+        last + kCrcPrefix.size() + 9 != text.size() || crc32(body.substr(0, last)) != stored) {
+      out.damaged = true;
+      return out;
+    }
+    body = body.substr(0, last);
+  }
+  std::istringstream lines{std::string(body)};
   std::string line;
   int line_no = 0;
-  while (std::getline(in, line)) {
+  while (std::getline(lines, line)) {
     ++line_no;
     if (line.empty() || line[0] == '#') continue;
     std::istringstream fields(line);
@@ -68,12 +104,27 @@ std::map<ParameterStore::Key, od::Bytes> ParameterStore::read_file() const {
     od::Bytes bytes;
     if (!(fields >> key >> hex) || std::sscanf(key.c_str(), "%4x:%2x", &index, &sub) != 2 ||
         !from_hex(hex, bytes)) {
+      // Only a version 1 file gets here damaged (version 2 passed its checksum).
       spdlog::warn("{}:{}: unreadable stored parameter line skipped", file_.string(), line_no);
       continue;
     }
-    values[{static_cast<uint16_t>(index), static_cast<uint8_t>(sub)}] = std::move(bytes);
+    out.values[{static_cast<uint16_t>(index), static_cast<uint8_t>(sub)}] = std::move(bytes);
   }
-  return values;
+  return out;
+}
+
+std::optional<std::filesystem::path> ParameterStore::set_aside() const {
+  // Kept for whoever wants to look at it, under the first free name.
+  for (int n = 1; n < 1000; ++n) {
+    std::filesystem::path to = with_suffix(file_, ".corrupt-" + std::to_string(n));
+    std::error_code ec;
+    if (std::filesystem::exists(to, ec)) continue;
+    std::filesystem::rename(file_, to, ec);
+    if (!ec) return to;
+    spdlog::error("cannot set aside {}: {}", file_.string(), ec.message());
+    break;
+  }
+  return std::nullopt;
 }
 
 bool ParameterStore::write_file(const std::map<Key, od::Bytes>& values) const {
@@ -84,6 +135,9 @@ bool ParameterStore::write_file(const std::map<Key, od::Bytes>& values) const {
     std::snprintf(head, sizeof head, "%04X:%02X ", key.first, key.second);
     text << head << to_hex(bytes) << "\n";
   }
+  char crc[32];
+  std::snprintf(crc, sizeof crc, "%s%08x\n", std::string(kCrcPrefix).c_str(), crc32(text.str()));
+  text << crc;
   std::error_code ec;
   std::filesystem::create_directories(file_.parent_path(), ec);
   std::filesystem::path tmp = file_;
@@ -111,7 +165,8 @@ bool ParameterStore::write_file(const std::map<Key, od::Bytes>& values) const {
 }
 
 bool ParameterStore::save(uint16_t first, uint16_t last) {
-  auto values = read_file();
+  // A damaged file contributes nothing: the save writes a whole, good file over it.
+  auto values = read_file().values;
   for (const auto& [index, obj] : dictionary_.objects()) {
     if (index < first || index > last) continue;
     for (const auto& [sub, e] : obj.entries)
@@ -121,14 +176,26 @@ bool ParameterStore::save(uint16_t first, uint16_t last) {
 }
 
 bool ParameterStore::forget(uint16_t first, uint16_t last) {
-  auto values = read_file();
+  auto values = read_file().values;
   std::erase_if(values, [&](const auto& kv) { return kv.first.first >= first && kv.first.first <= last; });
   return write_file(values);
 }
 
-void ParameterStore::load_into_dictionary(uint16_t first, uint16_t last) {
+ParameterStore::LoadReport ParameterStore::load_into_dictionary(uint16_t first, uint16_t last) {
+  LoadReport report;
+  // A save that crashed left its temporary file; the real file is the one that counts.
+  std::error_code ec;
+  std::filesystem::remove(with_suffix(file_, ".tmp"), ec);
   dictionary_.reset_to_defaults(first, last);
-  for (const auto& [key, bytes] : read_file()) {
+  Contents stored = read_file();
+  if (stored.damaged) {
+    spdlog::error("{} is not a valid stepnode parameter file (damaged or foreign): set aside, defaults apply",
+                  file_.string());
+    report.set_aside = set_aside();
+    if (!report.set_aside) report.set_aside = file_;  // could not rename: still reported
+    return report;
+  }
+  for (const auto& [key, bytes] : stored.values) {
     if (key.first < first || key.first > last) continue;
     od::Entry* e = dictionary_.find(key.first, key.second);
     // Restored values skip the validate hooks (the mapping procedure's ordering rules do
@@ -136,10 +203,12 @@ void ParameterStore::load_into_dictionary(uint16_t first, uint16_t last) {
     if (!e || !e->persistent || od::check_value(*e, bytes) != od::SdoAbort::None) {
       spdlog::warn("stored value for {:04X}:{:02X} does not fit the dictionary; default kept",
                    key.first, key.second);
+      report.refuse(key);
       continue;
     }
     e->value = bytes;
   }
+  return report;
 }
 
 }  // namespace stepnode::node

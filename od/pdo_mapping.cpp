@@ -31,6 +31,22 @@ SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> w
   return bits > kMaxPdoBits ? SdoAbort::PdoTooLong : SdoAbort::None;
 }
 
+SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index) {
+  const bool receive = index >= 0x1600 && index <= 0x17FF;
+  if (!receive && !(index >= 0x1A00 && index <= 0x1BFF)) return SdoAbort::NoObject;
+  const Entry* count = dictionary.find(index, 0);
+  if (!count) return SdoAbort::NoObject;
+  const uint8_t n = static_cast<uint8_t>(as_unsigned(count->type, count->value));
+  if (n > kMaxMappedEntries) return SdoAbort::PdoTooLong;  // more entries than the record has
+  std::vector<uint32_t> words;
+  for (uint8_t sub = 1; sub <= n; ++sub) {
+    const Entry* e = dictionary.find(index, sub);
+    if (!e) return SdoAbort::NoSubindex;
+    words.push_back(static_cast<uint32_t>(as_unsigned(e->type, e->value)));
+  }
+  return check_mapping(dictionary, words, receive ? PdoDirection::Receive : PdoDirection::Transmit);
+}
+
 size_t mapping_bits(const PdoMapping& mapping) {
   size_t bits = 0;
   for (const auto& m : mapping) bits += m.bits;
@@ -59,10 +75,9 @@ std::vector<uint8_t> pack_pdo(Dictionary& dictionary, const PdoMapping& mapping)
   std::vector<uint8_t> out(mapping_bytes(mapping), 0);
   size_t offset = 0;
   for (const auto& m : mapping) {
-    if (!m.dummy()) {
-      Entry& e = dictionary.at(m.index, m.sub);
-      if (e.on_read) e.on_read(e.value);
-      write_bits(out, offset, as_unsigned(e.type, e.value), m.bits);
+    if (Entry* e = m.dummy() ? nullptr : dictionary.find(m.index, m.sub)) {
+      if (e->on_read) e->on_read(e->value);
+      write_bits(out, offset, as_unsigned(e->type, e->value), m.bits);
     }
     offset += m.bits;
   }

@@ -34,10 +34,17 @@ SdoAbort check_mapping_entry(const Dictionary& dictionary, uint32_t word, PdoDir
 SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> words,
                        PdoDirection direction);
 
+// Checks the mapping record at `index` as it stands in the dictionary: RPDO mappings
+// 0x1600..0x17FF, TPDO mappings 0x1A00..0x1BFF (sub 0 the number of entries, at most 8).
+// Stored or configured records are loaded without the mapping procedure; this is its rule.
+SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index);
+
 size_t mapping_bits(const PdoMapping& mapping);
 inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(mapping) + 7) / 8; }
 
-// Packs the mapped values into a PDO payload (bit by bit, LSB first).
+// Packs the mapped values into a PDO payload (bit by bit, LSB first). An entry the
+// dictionary does not have packs as zeros (check_mapping_record keeps such mappings out
+// of use; this keeps a stale one from ever throwing in the send path).
 std::vector<uint8_t> pack_pdo(Dictionary& dictionary, const PdoMapping& mapping);
 // Writes the values of a received PDO into the dictionary (WriteOrigin::Pdo). Data shorter
 // than the mapping writes nothing and gives LengthTooLow; extra bytes are ignored. Returns

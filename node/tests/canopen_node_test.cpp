@@ -250,7 +250,7 @@ TEST_F(NodeTest, StoreRestoreAcrossRestartAndResetNode) {
   EXPECT_EQ(node->dictionary().get<uint32_t>(0x2F00, 1), 0u);
 }
 
-TEST_F(NodeTest, CorruptStoredLinesAreSkipped) {
+TEST_F(NodeTest, LinesAppendedToTheStoredFileMakeItDamagedAndTheNodeStartsOnDefaults) {
   ASSERT_EQ(sdo_write(0x1017, 0, 250, 2), 0u);
   ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173, 4), 0u);
   {
@@ -259,7 +259,9 @@ TEST_F(NodeTest, CorruptStoredLinesAreSkipped) {
   }
   std::ofstream(node->parameter_file().string() + ".tmp") << "half-written";
   make();
-  EXPECT_EQ(node->dictionary().get<uint16_t>(0x1017, 0), 250);
+  EXPECT_EQ(node->state(), NmtState::PreOperational);
+  EXPECT_EQ(node->dictionary().get<uint16_t>(0x1017, 0), 1000);  // past the checksum: not ours
+  EXPECT_FALSE(std::filesystem::exists(node->parameter_file().string() + ".tmp"));
 }
 
 TEST(NodeConfig, BadCommandLinesAreOneLineUsageErrors) {
