@@ -16,7 +16,7 @@
 namespace stepnode::canio {
 namespace {
 
-[[noreturn]] void fail(const std::string& iface, const char* what) {
+[[noreturn]] void fail(const std::string& iface, const std::string& what) {
   throw std::runtime_error(iface + ": " + what + ": " + std::strerror(errno));
 }
 
@@ -32,13 +32,15 @@ SocketCan::SocketCan(const std::string& iface, bool receive_own) : iface_(iface)
     ::close(fd_);
     throw std::runtime_error(iface + ": no such CAN interface");
   }
-  // Error frames: everything the controller reports (bus-off, passive, overflow...).
+  // Error frames: everything the controller reports (bus-off, passive, overflow...);
+  // kernel receive timestamps; the receive queue's drop count; own frames or not.
   can_err_mask_t err_mask = CAN_ERR_MASK;
-  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask);
   int on = 1;
-  ::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
   int own = receive_own ? 1 : 0;
-  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own);
+  set_option(SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask, "CAN_RAW_ERR_FILTER");
+  set_option(SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on, "SO_TIMESTAMPNS");
+  set_option(SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on, "SO_RXQ_OVFL");
+  set_option(SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own, "CAN_RAW_RECV_OWN_MSGS");
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(index);
@@ -50,6 +52,15 @@ SocketCan::SocketCan(const std::string& iface, bool receive_own) : iface_(iface)
   }
 }
 
+void SocketCan::set_option(int level, int name, const void* value, size_t size, const char* what) {
+  if (::setsockopt(fd_, level, name, value, static_cast<socklen_t>(size)) == 0) return;
+  int saved = errno;
+  ::close(fd_);
+  fd_ = -1;
+  errno = saved;
+  fail(iface_, std::string("setsockopt ") + what);
+}
+
 SocketCan::~SocketCan() {
   if (fd_ >= 0) ::close(fd_);
 }
@@ -57,14 +68,15 @@ SocketCan::~SocketCan() {
 void SocketCan::set_filters(const std::vector<std::pair<uint32_t, uint32_t>>& filters) {
   std::vector<can_filter> f;
   for (auto [id, mask] : filters) f.push_back({id, mask | CAN_EFF_FLAG | CAN_RTR_FLAG});
-  ::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.empty() ? nullptr : f.data(),
-               static_cast<socklen_t>(f.size() * sizeof(can_filter)));
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.empty() ? nullptr : f.data(),
+                   static_cast<socklen_t>(f.size() * sizeof(can_filter))) != 0)
+    fail(iface_, "setsockopt CAN_RAW_FILTER");
 }
 
 std::optional<ReceivedFrame> SocketCan::receive() {
   can_frame raw{};
   iovec iov{&raw, sizeof raw};
-  char control[CMSG_SPACE(sizeof(timespec)) + 64];
+  char control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(uint32_t)) + 64];
   msghdr msg{};
   msg.msg_iov = &iov;
   msg.msg_iovlen = 1;
@@ -83,6 +95,8 @@ std::optional<ReceivedFrame> SocketCan::receive() {
       timespec ts;
       std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
       r.kernel_time_ns = static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
+    } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+      std::memcpy(&rx_overruns_, CMSG_DATA(c), sizeof rx_overruns_);
     }
   }
   if (raw.can_id & CAN_ERR_FLAG) {

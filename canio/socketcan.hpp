@@ -42,12 +42,18 @@ class SocketCan {
   bool flush();
   bool has_pending() const { return !queue_.empty(); }
   uint64_t dropped() const { return dropped_; }
+  // Received frames the kernel dropped because this socket's queue was full, since it was
+  // opened (SO_RXQ_OVFL; the count arrives with the next frame that is received).
+  uint32_t receive_overruns() const { return rx_overruns_; }
 
  private:
+  void set_option(int level, int name, const void* value, size_t size, const char* what);
+
   int fd_ = -1;
   std::string iface_;
   std::deque<od::CanFrame> queue_;
   uint64_t dropped_ = 0;
+  uint32_t rx_overruns_ = 0;
   static constexpr size_t kMaxQueue = 4096;
 };
 

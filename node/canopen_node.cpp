@@ -210,6 +210,20 @@ void CanopenNode::on_tick(uint64_t now_us) {
   emcy_.on_tick(now_us);
 }
 
+void CanopenNode::on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
+  const uint32_t lost = socket_total - overruns_seen_;  // unsigned: survives the wrap
+  if (lost == 0) return;
+  overruns_seen_ = socket_total;
+  const uint32_t total = dictionary_.get<uint32_t>(od::kReceiveOverruns, 0) + lost;
+  dictionary_.put<uint32_t>(od::kReceiveOverruns, 0, total);
+  spdlog::warn("CAN receive queue overflow: {} frames dropped ({} since reset)", lost, total);
+  // CiA 301: 0x8110 CAN overrun (objects lost); manufacturer bytes: frames lost, LE.
+  emcy_.report(emcy_code::kCanOverrun, error_bits::kCommunication,
+               {static_cast<uint8_t>(lost), static_cast<uint8_t>(lost >> 8), static_cast<uint8_t>(lost >> 16),
+                static_cast<uint8_t>(lost >> 24), 0},
+               now_us);
+}
+
 void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
   switch (event) {
     case BusEvent::ErrorPassive:

@@ -40,6 +40,9 @@ class CanopenNode {
   void on_frame(const od::CanFrame& frame, uint64_t now_us);
   void on_tick(uint64_t now_us);
   void on_bus_event(BusEvent event, uint64_t now_us);
+  // The socket's count of received frames it dropped (its queue was full), as reported
+  // with the latest frame: an increase is EMCY 0x8110 and adds to object 0x2F10.
+  void on_receive_overruns(uint32_t socket_total, uint64_t now_us);
 
   // An error the device found before it could talk (a configured value it refused): sent
   // as EMCY after every power-up and reset node, since the configuration stays the same.
@@ -87,6 +90,7 @@ class CanopenNode {
     std::array<uint8_t, 5> manufacturer;
   };
   std::vector<PowerUpError> power_up_errors_;
+  uint32_t overruns_seen_ = 0;  // the socket's count when last looked at
 };
 
 }  // namespace stepnode::node

@@ -85,6 +85,7 @@ int run(const node::NodeConfig& cfg) {
       canopen.on_frame(r->frame, now);
       frame_arrival_us = 0;
     }
+    canopen.on_receive_overruns(can.receive_overruns(), canio::EventLoop::now_us());
   });
   loop.every(cfg.tick_us, [&] {
     canopen.on_tick(canio::EventLoop::now_us());

@@ -249,6 +249,13 @@ void add_user_objects(Dictionary& od) {
   data.persistent = true;
 }
 
+void add_diagnostic_objects(Dictionary& od) {
+  // How many received frames the CAN socket's queue dropped since the node started (the
+  // kernel's SO_RXQ_OVFL count); each increase also goes out as EMCY 0x8110.
+  od.var(kReceiveOverruns, "CAN frames dropped at the socket", DT::Unsigned32, AC::ReadOnly,
+         encode<uint32_t>(0), true);
+}
+
 }  // namespace
 
 bool is_restricted_can_id(uint32_t id) {
@@ -270,6 +277,7 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);
   }
   add_user_objects(od);
+  add_diagnostic_objects(od);
   add_axis_objects(od, info);
   add_hp_objects(od, info);
 }

@@ -28,6 +28,8 @@ constexpr unsigned kPdosPerAxis = 4;
 constexpr unsigned kHeartbeatConsumers = 4;
 constexpr unsigned kErrorHistoryLength = 8;
 constexpr size_t kUserDataMaxLength = 4096;
+// 0x2F10: received frames the CAN socket dropped (receive queue overflow), U32 ro.
+constexpr uint16_t kReceiveOverruns = 0x2F10;
 
 inline unsigned pdo_count(const DeviceInfo& info) { return kPdosPerAxis * info.axes; }
 // Simulated motors (0x5000 blocks): one per axis, or 3 behind a multiplexed axis.
