@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "od/cob_id.hpp"
+
 namespace stepnode::bridge {
 namespace {
 
@@ -24,16 +26,8 @@ void check(const BridgeConfig& cfg) {
 }
 
 uint32_t parse_cob_id(const std::string& text, const std::string& what) {
-  size_t used = 0;
-  unsigned long v = 0;
-  try {
-    v = std::stoul(text, &used, 0);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || v < 1 || v > 0x7FF)
-    throw UsageError(what + ": '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
-  return static_cast<uint32_t>(v);
+  if (auto id = od::parse_can_id(text)) return *id;
+  throw UsageError(what + ": '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
 }
 
 void add_sdo_channel(BridgeConfig& cfg, const NodeSdoChannel& ch, const std::string& what) {

@@ -2,6 +2,8 @@
 // every configurable one follows when it is written.
 #pragma once
 #include <cstdint>
+#include <optional>
+#include <string>
 
 #include "od/sdo_abort.hpp"
 
@@ -17,5 +19,8 @@ constexpr uint32_t kCobIdHighBits = 0x1FFFF800;  // bits 11..28: 0 for an 11-bit
 // 7.3.5, 7.5.2.17, 7.5.2.33, 7.5.2.35, 7.5.2.37). `valid_mask_when_clear` is the bit that,
 // clear, makes the object valid (kCobInvalid), or 0 for an object that is always valid.
 SdoAbort check_cob_id(uint32_t current, uint32_t next, uint32_t valid_mask_when_clear);
+
+// An 11-bit CAN-ID (1..0x7FF) as a user writes it ("0x685", "1669"), or nullopt.
+std::optional<uint32_t> parse_can_id(const std::string& text);
 
 }  // namespace stepnode::od

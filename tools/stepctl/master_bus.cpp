@@ -6,6 +6,8 @@
 #include <ctime>
 #include <thread>
 
+#include "od/cob_id.hpp"
+
 namespace stepnode::tools {
 namespace {
 
@@ -17,16 +19,8 @@ bool protocol_failure(od::SdoAbort a) {
 }
 
 uint32_t parse_cob_id(const std::string& text) {
-  size_t used = 0;
-  unsigned long v = 0;
-  try {
-    v = std::stoul(text, &used, 0);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || v < 1 || v > 0x7FF)
-    throw std::invalid_argument("--sdo-cob-ids: '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
-  return static_cast<uint32_t>(v);
+  if (auto id = od::parse_can_id(text)) return *id;
+  throw std::invalid_argument("--sdo-cob-ids: '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
 }
 
 }  // namespace
