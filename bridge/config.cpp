@@ -3,8 +3,12 @@
 #include <CLI/CLI.hpp>
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
+
+#include "od/cob_id.hpp"
 
 namespace stepnode::bridge {
 namespace {
@@ -19,6 +23,41 @@ void check(const BridgeConfig& cfg) {
   bool level_ok = false;
   for (const char* l : levels) level_ok |= cfg.log_level == l;
   if (!level_ok) throw UsageError("log level \"" + cfg.log_level + "\": must be trace, debug, info, warn, error, critical or off");
+}
+
+uint32_t parse_cob_id(const std::string& text, const std::string& what) {
+  if (auto id = od::parse_can_id(text)) return *id;
+  throw UsageError(what + ": '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
+}
+
+void add_sdo_channel(BridgeConfig& cfg, const NodeSdoChannel& ch, const std::string& what) {
+  if (ch.node < 1 || ch.node > 127) throw UsageError(what + ": node must be 1..127");
+  if (ch.client_to_server == ch.server_to_client) throw UsageError(what + ": the two COB-IDs must differ");
+  for (const NodeSdoChannel& other : cfg.sdo_channels)
+    if (other.node == ch.node) throw UsageError(what + ": node " + std::to_string(ch.node) + " has a channel already");
+  cfg.sdo_channels.push_back(ch);
+}
+
+// [sdo_channels] 5 = [0x685, 0x6C5]: node = [client->server, server->client].
+void load_sdo_channels(const toml::table& t, BridgeConfig& cfg, const std::string& path) {
+  const toml::table* channels = t["sdo_channels"].as_table();
+  if (!channels) throw UsageError("config " + path + ": sdo_channels: must be a table (node = [rx, tx])");
+  for (const auto& [key, value] : *channels) {
+    const std::string what = "config " + path + ": sdo_channels." + std::string(key.str());
+    const toml::array* ids = value.as_array();
+    if (!ids || ids->size() != 2 || !ids->at(0).is_integer() || !ids->at(1).is_integer())
+      throw UsageError(what + ": must be [CLIENT_TO_SERVER, SERVER_TO_CLIENT]");
+    NodeSdoChannel ch;
+    ch.node = static_cast<uint8_t>(std::clamp<int64_t>(std::atoll(std::string(key.str()).c_str()), 0, 255));
+    auto cob_id = [&](const toml::node& n) {
+      const int64_t v = *n.value<int64_t>();
+      if (v < 1 || v > 0x7FF) throw UsageError(what + ": COB-IDs must be 11-bit CAN-IDs (1..0x7FF)");
+      return static_cast<uint32_t>(v);
+    };
+    ch.client_to_server = cob_id(ids->at(0));
+    ch.server_to_client = cob_id(ids->at(1));
+    add_sdo_channel(cfg, ch, what);
+  }
 }
 
 // Applies the file's keys that the command line did not set.
@@ -63,9 +102,10 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000, cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
   // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
   uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
+  if (t.contains("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(t, cfg, path);
   for (const auto& [key, value] : t) {
     static const char* known[] = {"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level",
-                                  "tick_ms", "heartbeat_timeout_ms", "sdo_timeout_ms"};
+                                  "tick_ms", "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels"};
     bool ok = false;
     for (const char* k : known) ok |= key.str() == k;
     if (!ok) bad(std::string(key.str()), "unknown key");
@@ -73,6 +113,21 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
 }
 
 }  // namespace
+
+NodeSdoChannel parse_sdo_channel(const std::string& text) {
+  const std::string what = "--sdo-channel " + text;
+  const size_t colon = text.find(':'), comma = text.find(',');
+  if (colon == std::string::npos || comma == std::string::npos || comma < colon)
+    throw UsageError(what + ": give NODE:CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 5:0x685,0x6C5)");
+  NodeSdoChannel ch;
+  const std::string node = text.substr(0, colon);
+  if (node.empty() || node.find_first_not_of("0123456789") != std::string::npos || node.size() > 3)
+    throw UsageError(what + ": node must be 1..127");
+  ch.node = static_cast<uint8_t>(std::min(std::stoi(node), 255));
+  ch.client_to_server = parse_cob_id(text.substr(colon + 1, comma - colon - 1), what);
+  ch.server_to_client = parse_cob_id(text.substr(comma + 1), what);
+  return ch;
+}
 
 BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
   BridgeConfig cfg;
@@ -87,6 +142,11 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
   app.add_option("--profiles", cfg.profiles, "Fast DDS XML profiles file (loaded before FASTRTPS_DEFAULT_PROFILES_FILE)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
   app.add_option("--tick-ms", cfg.tick_ms, "observer timer period in ms (1..1000, default 10)");
+  std::vector<std::string> sdo_channels;
+  app.add_option("--sdo-channel", sdo_channels,
+                 "NODE:RX,TX: read node NODE on its SDO server channel with these COB-IDs (client->server, "
+                 "server->client, as set in 0x1201..0x1203 sub 1/2); repeatable. Other nodes: the default "
+                 "channel, when quiet");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -96,6 +156,7 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
   } catch (const CLI::ParseError& e) {
     throw UsageError(e.what());
   }
+  for (const std::string& text : sdo_channels) add_sdo_channel(cfg, parse_sdo_channel(text), "--sdo-channel " + text);
   if (!config_file.empty()) {
     if (!std::filesystem::is_regular_file(config_file)) throw UsageError("config " + config_file + ": cannot read file");
     load_config_file(config_file, cfg, app);

@@ -3,6 +3,9 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "bridge/observer/bus_observer.hpp"
 
 namespace stepnode::bridge {
 
@@ -16,7 +19,14 @@ struct BridgeConfig {
   uint32_t tick_ms = 10;        // observer timers (SDO timeouts, heartbeat loss, health)
   uint32_t heartbeat_timeout_ms = 0;  // 0: 3 x the node's heartbeat interval, min 1000
   uint32_t sdo_timeout_ms = 500;
+  // SDO server channels of the bridge's own, one per node (--sdo-channel NODE:RX,TX or the
+  // [sdo_channels] table); other nodes are read on their default channel, when it is quiet.
+  std::vector<NodeSdoChannel> sdo_channels;
 };
+
+// "5:0x685,0x6C5": node 5's channel, client->server and server->client COB-IDs. Throws
+// UsageError naming the rule.
+NodeSdoChannel parse_sdo_channel(const std::string& text);
 
 // Bad input: the message is the one line printed before exiting with status 2.
 struct UsageError : std::runtime_error {

@@ -52,6 +52,7 @@ int run(const bridge::BridgeConfig& cfg) {
   bridge::ObserverConfig observer_config;
   observer_config.heartbeat_timeout_ms = cfg.heartbeat_timeout_ms;
   observer_config.sdo_timeout_ms = cfg.sdo_timeout_ms;
+  observer_config.sdo_channels = cfg.sdo_channels;
   bridge::BusObserver observer(publisher, observer_config);
 
   std::vector<od::CanFrame> out;

@@ -49,8 +49,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           }),
       pdo_(dictionary_, od::pdo_count(options_.device), [this](const od::CanFrame& f) { send(f); },
            emcy_),
-      sdo_(dictionary_, od::cob::kSdoTx + options_.device.node_id) {
-  sdo_.set_timeout_us(options_.sdo_timeout_us);
+      sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }) {
   install_service_hooks();
 }
 
@@ -138,6 +137,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
     load_parameters(0x1000, 0x1FFF, now_us);
   }
   pdo_.mark_dirty();
+  sdo_.reconfigure();  // 0x1201..0x1203 as stored (or configured)
   consumer_.reset();
   sync_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
@@ -184,10 +184,8 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
 
   if (sync_.on_frame(frame, now_us)) {
     // handled
-  } else if (frame.id == (dictionary_.get<uint32_t>(0x1200, 1) & 0x7FF) && !frame.rtr) {
-    sdo_out_.clear();
-    sdo_.on_request(frame, now_us, sdo_out_);
-    for (const auto& f : sdo_out_) send(f);
+  } else if (sdo_.on_frame(frame, now_us)) {
+    // handled by the SDO server channel it was addressed to
   } else if (state_ == NmtState::Operational) {
     pdo_.on_frame(frame, now_us);
   }
@@ -202,9 +200,7 @@ void CanopenNode::on_tick(uint64_t now_us) {
   if (state_ == NmtState::Initialising) return;
   heartbeat_.on_tick(state_, now_us);
   if (state_ == NmtState::Stopped) return;
-  sdo_out_.clear();
-  sdo_.on_tick(now_us, sdo_out_);
-  for (const auto& f : sdo_out_) send(f);
+  sdo_.on_tick(now_us);
   sync_.on_tick(now_us);
   pdo_.on_tick(now_us);
   emcy_.on_tick(now_us);

@@ -12,11 +12,11 @@
 #include "node/nmt.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
+#include "node/sdo_server_channels.hpp"
 #include "node/sync.hpp"
 #include "od/can_frame.hpp"
 #include "od/device_dictionary.hpp"
 #include "od/dictionary.hpp"
-#include "od/sdo_server.hpp"
 
 namespace stepnode::node {
 
@@ -82,9 +82,8 @@ class CanopenNode {
   HeartbeatConsumer consumer_;
   SyncService sync_;
   PdoEngine pdo_;
-  od::SdoServer sdo_;
+  SdoServerChannels sdo_;  // 0x1200..0x1203
   NmtState state_ = NmtState::Initialising;
-  std::vector<od::CanFrame> sdo_out_;
   struct PowerUpError {
     uint16_t code;
     std::array<uint8_t, 5> manufacturer;

@@ -5,15 +5,12 @@
 #include "od/axis_objects.hpp"
 #include "od/hp_objects.hpp"
 #include "od/can_frame.hpp"
+#include "od/cob_id.hpp"
 #include "od/pdo_mapping.hpp"
+#include "od/sdo_server_parameter.hpp"
 
 namespace stepnode::od {
 namespace {
-
-constexpr uint32_t kCobInvalid = 0x80000000;  // bit 31: object does not exist / not valid
-constexpr uint32_t kCobGenerate = 0x40000000;  // bit 30: SYNC producer (0x1005), no RTR (TPDO)
-constexpr uint32_t kCobExtended = 0x20000000;  // bit 29: 29-bit ID (not supported)
-constexpr uint32_t kCobIdHighBits = 0x1FFFF800;  // bits 11..28: 0 for an 11-bit CAN-ID
 
 using DT = DataType;
 using AC = Access;
@@ -24,19 +21,6 @@ std::string hex_index(const char* fmt, unsigned n) {
   char buf[32];
   std::snprintf(buf, sizeof buf, fmt, n);
   return buf;
-}
-
-// COB-ID rules shared by EMCY and PDOs: no 29-bit IDs (bit 29, and bits 11..28 are 0 with
-// an 11-bit CAN-ID), no restricted IDs, and the CAN-ID of an object that is valid may not
-// change (CiA 301 7.3.5, 7.5.2.17, 7.5.2.35, 7.5.2.37).
-SdoAbort check_cob_id(uint32_t current, uint32_t next, uint32_t valid_mask_when_clear) {
-  if (next & (kCobExtended | kCobIdHighBits)) return SdoAbort::InvalidValue;
-  bool next_valid = valid_mask_when_clear ? !(next & valid_mask_when_clear) : true;
-  bool current_valid = valid_mask_when_clear ? !(current & valid_mask_when_clear) : true;
-  uint32_t id = next & 0x7FF;
-  if (next_valid && is_restricted_can_id(id)) return SdoAbort::InvalidValue;
-  if (next_valid && current_valid && (current & 0x7FF) != id) return SdoAbort::InvalidValue;
-  return SdoAbort::None;
 }
 
 void add_identity(Dictionary& od, const DeviceInfo& info) {
@@ -156,16 +140,6 @@ void add_store_restore(Dictionary& od) {
   }
 }
 
-void add_sdo_server(Dictionary& od, const DeviceInfo& info) {
-  Object& sdo = od.record(0x1200, "SDO server parameter");
-  Entry& rx = sdo.add(1, "COB-ID client to server", DT::Unsigned32, AC::ReadOnly,
-                      encode<uint32_t>(cob::kSdoRx + info.node_id));
-  Entry& tx = sdo.add(2, "COB-ID server to client", DT::Unsigned32, AC::ReadOnly,
-                      encode<uint32_t>(cob::kSdoTx + info.node_id));
-  rx.eds_default = "$NODEID+0x600";
-  tx.eds_default = "$NODEID+0x580";
-}
-
 // Communication + mapping parameters of one PDO, with the CiA 301 reconfiguration rules.
 void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   bool rx = dir == PdoDirection::Receive;
@@ -271,7 +245,7 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
   add_sync_and_emcy(od, info);
   add_heartbeat(od);
   add_store_restore(od);
-  add_sdo_server(od, info);
+  add_sdo_server_parameters(od, info.node_id);
   for (unsigned n = 0; n < pdo_count(info); ++n) {
     add_pdo(od, PdoDirection::Receive, n, info.node_id);
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);

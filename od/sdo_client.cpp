@@ -17,8 +17,17 @@
 // old one with 0x08000000 first, so that a server in the middle of a block download (where
 // it cannot recognise an initiate) lets it go. Frames with DLC < 8 are answered with abort
 // 0x05040001 (7.2.4.3.1), except frames starting with 0x80, which are aborts and end the
-// transfer unanswered. A response naming another index/sub-index than the request is
-// refused with 0x06040043.
+// transfer unanswered.
+//
+// CiA 301 gives one client to an SDO channel, but a second master on the same channel
+// happens (a bridge, a second tool): its answers then arrive on our COB-ID too. So every
+// response is checked against the transfer before it is used: the command specifier the
+// phase expects, the request's multiplexer in initiate responses (and in aborts), the
+// toggle of the segment in flight. A response that fails a check is another transfer's
+// (or stale): it is ignored and counted (SdoResult::foreign_replies), never turned into
+// an abort, which would end the other client's transfer as well. If no right answer
+// comes, the transfer times out, and the count tells the caller why. The block upload
+// sub-block is the exception: its segments carry only a sequence number.
 #include "od/sdo_client.hpp"
 
 #include <algorithm>
@@ -74,6 +83,7 @@ struct SdoClient::State {
   SdoClient& client;
   Transfer t;
   SdoResult result;
+  unsigned foreign = 0;  // responses of this transfer's time that were not its answers
 
   void begin(uint16_t index, uint8_t sub, uint64_t now_us, std::vector<CanFrame>& out);
   void finish(Bytes data = {});
@@ -82,6 +92,7 @@ struct SdoClient::State {
   bool same_object(const CanFrame& f) const {
     return frame_index(f) == t.index && frame_sub(f) == t.sub;
   }
+  bool expected(const CanFrame& f) const;
 
   void response(const CanFrame& f, uint64_t now_us, std::vector<CanFrame>& out);
   void send_download_segment(std::vector<CanFrame>& out);
@@ -166,10 +177,12 @@ void SdoClient::State::begin(uint16_t index, uint8_t sub, uint64_t now_us,
   t.sub = sub;
   t.last_rx_us = now_us;
   result = SdoResult{};
+  foreign = 0;
 }
 
 void SdoClient::State::finish(Bytes data) {
   result = SdoResult{};
+  result.foreign_replies = foreign;
   result.data = std::move(data);
   t = Transfer{};
 }
@@ -178,6 +191,7 @@ void SdoClient::State::fail(SdoAbort code, std::vector<CanFrame>& out) {
   out.push_back(abort_frame(client.request_cob_id_, t.index, t.sub, code));
   result = SdoResult{};
   result.abort = code;
+  result.foreign_replies = foreign;
   t = Transfer{};
 }
 
@@ -185,72 +199,85 @@ void SdoClient::State::send(uint8_t byte0, uint32_t value, std::vector<CanFrame>
   out.push_back(frame(client.request_cob_id_, byte0, t.index, t.sub, value));
 }
 
+// CiA 301 7.2.4.3: which server answers the phase waits for.
+bool SdoClient::State::expected(const CanFrame& f) const {
+  const uint8_t b0 = f.data[0];
+  const uint8_t cs = command(b0);
+  const bool toggle_echoed = ((b0 & kToggle) != 0) == t.toggle;
+  switch (t.phase) {
+    case Phase::DownloadInitiate: return cs == scs::kDownloadInitiate && same_object(f);
+    case Phase::DownloadSegment: return cs == scs::kDownloadSegment && toggle_echoed;
+    case Phase::UploadInitiate: return cs == scs::kUploadInitiate && same_object(f);
+    case Phase::UploadSegment: return cs == scs::kUploadSegment && toggle_echoed;
+    case Phase::BlockDownloadInitiate:
+      return cs == scs::kBlockDownload && block_sub(b0) == kBlockInitiate && same_object(f);
+    case Phase::BlockDownloadSub: return cs == scs::kBlockDownload && block_sub(b0) == kBlockAck;
+    case Phase::BlockDownloadEnd: return cs == scs::kBlockDownload && block_sub(b0) == kBlockEnd;
+    case Phase::BlockUploadInitiate:
+      // The server may answer a block upload like a normal upload (protocol switch).
+      return (cs == scs::kUploadInitiate ||
+              (cs == scs::kBlockUpload && (b0 & 0x01) == kBlockInitiate)) &&
+             same_object(f);
+    case Phase::BlockUploadEnd: return cs == scs::kBlockUpload && (b0 & 0x01) == kBlockEnd;
+    case Phase::Idle:
+    case Phase::BlockUploadSub: break;
+  }
+  return false;
+}
+
 void SdoClient::State::response(const CanFrame& f, uint64_t now_us, std::vector<CanFrame>& out) {
   if (f.dlc >= 1 && f.data[0] == kAbortByte) {
+    if (f.dlc == 8 && !same_object(f)) {
+      ++foreign;  // another transfer's abort
+      return;
+    }
     const auto code = f.dlc == 8 ? static_cast<SdoAbort>(get_u32(&f.data[4])) : SdoAbort::General;
     t = Transfer{};
     result = SdoResult{};
     result.abort = code == SdoAbort::None ? SdoAbort::General : code;
     result.aborted_by_server = true;
+    result.foreign_replies = foreign;
     return;
   }
   if (f.dlc < 8) return fail(SdoAbort::BadCommand, out);
-  t.last_rx_us = now_us;
   if (t.phase == Phase::BlockUploadSub) {
+    t.last_rx_us = now_us;
     SdoAbort a = t.receiver.on_segment(f, client.request_cob_id_, now_us, out);
     if (a != SdoAbort::None) return fail(a, out);
     if (t.receiver.finished()) t.phase = Phase::BlockUploadEnd;
     return;
   }
-
-  const uint8_t b0 = f.data[0];
-  const uint8_t cs = command(b0);
+  if (!expected(f)) {
+    ++foreign;  // not an answer to us: the timeout still counts from our last one
+    return;
+  }
+  t.last_rx_us = now_us;
   switch (t.phase) {
     case Phase::DownloadInitiate:
-      if (cs != scs::kDownloadInitiate) break;
-      if (!same_object(f)) return fail(SdoAbort::ParameterIncompatible, out);
       if (t.expedited) return finish();
       return send_download_segment(out);
     case Phase::DownloadSegment:
-      if (cs != scs::kDownloadSegment) break;
-      if (((b0 & kToggle) != 0) != t.toggle) return fail(SdoAbort::ToggleBit, out);
       if (t.sent_last) return finish();
       t.toggle = !t.toggle;
       return send_download_segment(out);
-    case Phase::UploadInitiate:
-      if (cs == scs::kUploadInitiate) return upload_initiate_response(f, out);
-      break;
-    case Phase::UploadSegment:
-      if (cs == scs::kUploadSegment) return upload_segment(f, out);
-      break;
+    case Phase::UploadInitiate: return upload_initiate_response(f, out);
+    case Phase::UploadSegment: return upload_segment(f, out);
     case Phase::BlockDownloadInitiate: {
-      if (cs != scs::kBlockDownload || block_sub(b0) != kBlockInitiate) break;
-      if (!same_object(f)) return fail(SdoAbort::ParameterIncompatible, out);
       const uint8_t blksize = f.data[4];
       if (!valid_block_size(blksize)) return fail(SdoAbort::InvalidBlockSize, out);
       t.sender.start(std::move(t.data), blksize);
       t.phase = Phase::BlockDownloadSub;
       return t.sender.send_sub_block(client.request_cob_id_, out);
     }
-    case Phase::BlockDownloadSub:
-      if (cs == scs::kBlockDownload && block_sub(b0) == kBlockAck) return block_download_ack(f, out);
-      break;
-    case Phase::BlockDownloadEnd:
-      if (cs == scs::kBlockDownload && block_sub(b0) == kBlockEnd) return finish();
-      break;
+    case Phase::BlockDownloadSub: return block_download_ack(f, out);
+    case Phase::BlockDownloadEnd: return finish();
     case Phase::BlockUploadInitiate:
-      // The server may answer a block upload like a normal upload (protocol switch).
-      if (cs == scs::kUploadInitiate) return upload_initiate_response(f, out);
-      if (cs == scs::kBlockUpload && (b0 & 0x01) == kBlockInitiate)
-        return block_upload_initiate_response(f, now_us, out);
-      break;
-    case Phase::BlockUploadEnd:
-      if (cs == scs::kBlockUpload && (b0 & 0x01) == kBlockEnd) return block_upload_end(f, out);
-      break;
+      if (command(f.data[0]) == scs::kUploadInitiate) return upload_initiate_response(f, out);
+      return block_upload_initiate_response(f, now_us, out);
+    case Phase::BlockUploadEnd: return block_upload_end(f, out);
     case Phase::Idle:
-    case Phase::BlockUploadSub: break;
+    case Phase::BlockUploadSub: return;
   }
-  fail(SdoAbort::BadCommand, out);
 }
 
 // 7.2.4.3.4: up to 7 bytes a segment, n = unused bytes, c on the last (also when the
@@ -269,7 +296,6 @@ void SdoClient::State::send_download_segment(std::vector<CanFrame>& out) {
 
 // 7.2.4.3.6: expedited (with or without the size) ends here; otherwise segments follow.
 void SdoClient::State::upload_initiate_response(const CanFrame& f, std::vector<CanFrame>& out) {
-  if (!same_object(f)) return fail(SdoAbort::ParameterIncompatible, out);
   const uint8_t b0 = f.data[0];
   if (b0 & kExpedited) {
     const size_t count = (b0 & kSizeIndicated) ? 4 - initiate_n(b0) : 4;
@@ -283,10 +309,9 @@ void SdoClient::State::upload_initiate_response(const CanFrame& f, std::vector<C
   request_segment(out);
 }
 
-// 7.2.4.3.7: the toggle must echo the request's; 7 - n bytes; c ends the transfer.
+// 7.2.4.3.7: 7 - n bytes (the toggle echoed the request's: see expected()); c ends it.
 void SdoClient::State::upload_segment(const CanFrame& f, std::vector<CanFrame>& out) {
   const uint8_t b0 = f.data[0];
-  if (((b0 & kToggle) != 0) != t.toggle) return fail(SdoAbort::ToggleBit, out);
   const size_t count = kSegmentBytes - segment_n(b0);
   const size_t limit = t.size_indicated ? t.size : kMaxTransferBytes;
   if (t.data.size() + count > limit)
@@ -322,7 +347,6 @@ void SdoClient::State::block_download_ack(const CanFrame& f, std::vector<CanFram
 // 7.2.4.3.12: sc and s in byte 0, the size in bytes 4..7; the client says "start".
 void SdoClient::State::block_upload_initiate_response(const CanFrame& f, uint64_t now_us,
                                                       std::vector<CanFrame>& out) {
-  if (!same_object(f)) return fail(SdoAbort::ParameterIncompatible, out);
   const uint8_t b0 = f.data[0];
   t.crc = (b0 & kBlockCrc) != 0;
   t.size_indicated = (b0 & kBlockSize) != 0;

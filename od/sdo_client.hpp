@@ -14,6 +14,10 @@ namespace stepnode::od {
 struct SdoResult {
   SdoAbort abort = SdoAbort::None;  // from the server, or detected by the client
   bool aborted_by_server = false;
+  // Responses on our COB-ID that were not answers to this transfer (another object, a
+  // command specifier or toggle this transfer does not expect): another client shares the
+  // server's channel. With a Timeout it means the channel was busy, not the node absent.
+  unsigned foreign_replies = 0;
   Bytes data;  // uploaded data
   bool ok() const { return abort == SdoAbort::None; }
 };
@@ -36,7 +40,8 @@ class SdoClient {
                     std::vector<CanFrame>& out);
   void start_download(uint16_t index, uint8_t sub, Bytes data, Mode mode, uint64_t now_us,
                       std::vector<CanFrame>& out);
-  // Feeds a frame from the bus; frames not on the response COB-ID are ignored.
+  // Feeds a frame from the bus; frames not on the response COB-ID are ignored, and so are
+  // responses that do not belong to the transfer in progress (counted in foreign_replies).
   void on_frame(const CanFrame& frame, uint64_t now_us, std::vector<CanFrame>& out);
   // Times the transfer out (sends abort 0x05040000 to the server, ends with Timeout).
   void on_tick(uint64_t now_us, std::vector<CanFrame>& out);

@@ -22,9 +22,16 @@ constexpr uint16_t kHeartbeatProducerTime = 0x1017;
 constexpr uint16_t kPdoParamsFirst = 0x1800;  // TPDO communication 0x1800.., mapping 0x1A00..
 constexpr uint16_t kPdoParamsLast = 0x1BFF;
 
+NodeSdoChannel channel_of(uint8_t id, const ObserverConfig& c) {
+  for (const NodeSdoChannel& ch : c.sdo_channels)
+    if (ch.node == id) return ch;
+  return NodeSdoChannel{id, 0, 0};  // 0: SdoChannel takes the default channel
+}
+
 struct Node {
-  Node(uint8_t id, const ObserverConfig& c)
-      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000, c.own_frames_echoed),
+  Node(uint8_t id, const ObserverConfig& c, NodeSdoChannel ch = {})
+      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000, c.own_frames_echoed,
+            ch.client_to_server, ch.server_to_client),
         backoff(c.retry_initial_ms, c.retry_max_ms) {
     health.node = id;
   }
@@ -51,6 +58,9 @@ struct BusObserver::Impl {
     // bridge processes, which is all the jitter needs.
     random = c.random_seed ? c.random_seed
                            : static_cast<uint32_t>(reinterpret_cast<uintptr_t>(this) >> 4) | 1u;
+    for (const NodeSdoChannel& ch : c.sdo_channels)
+      for (uint32_t cob_id : {ch.client_to_server, ch.server_to_client})
+        if (cob_id <= 0x7FF) sdo_channel_node[cob_id] = ch.node;
   }
 
   SampleSink& sink;
@@ -60,6 +70,8 @@ struct BusObserver::Impl {
   std::array<std::unique_ptr<Node>, kNodeIds> nodes;
   // SDO traffic to nodes not known yet: the quiet wait must count it when they appear.
   std::array<uint64_t, kNodeIds> early_sdo_us{};
+  // CAN-ID -> node, for the SDO channels of the bridge's own (config.sdo_channels).
+  std::array<uint8_t, 0x800> sdo_channel_node{};
   uint32_t random = 1;  // xorshift32 state for the collision jitter
 
   uint32_t next_random() {
@@ -72,7 +84,7 @@ struct BusObserver::Impl {
   Node* find(uint8_t id) { return id > 0 && id < kNodeIds ? nodes[id].get() : nullptr; }
   Node& get(uint8_t id) {
     if (!nodes[id]) {
-      nodes[id] = std::make_unique<Node>(id, config);
+      nodes[id] = std::make_unique<Node>(id, config, channel_of(id, config));
       if (early_sdo_us[id]) nodes[id]->sdo.note_foreign(early_sdo_us[id]);
     }
     return *nodes[id];
@@ -133,6 +145,7 @@ void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector
     ++m.counters.undecoded;
     return;
   }
+  if (uint8_t owner = m.sdo_channel_node[f.id]) return m.on_sdo(owner, of, now_us, out);
   const auto id = static_cast<uint8_t>(f.id & 0x7F);
   const uint32_t function = f.id & 0x780;
   if (f.id == od::cob::kNmt) return;  // NMT commands: the heartbeats that follow tell the state

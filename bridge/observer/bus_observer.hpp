@@ -12,6 +12,14 @@
 
 namespace stepnode::bridge {
 
+// A node's SDO server channel given to this bridge (one of its 0x1201..0x1203, CiA 301
+// 7.5.2.33): the bridge reads there instead of waiting for quiet on the default channel.
+struct NodeSdoChannel {
+  uint8_t node = 0;
+  uint32_t client_to_server = 0;  // sub 1
+  uint32_t server_to_client = 0;  // sub 2
+};
+
 struct ObserverConfig {
   uint32_t heartbeat_timeout_ms = 0;   // 0: 3 x the node's heartbeat interval (seen), min 1000
   uint32_t sdo_timeout_ms = 500;
@@ -29,6 +37,7 @@ struct ObserverConfig {
   // echo. Off by default: with SocketCAN's defaults an identical request is another
   // master's (a second bridge reading the same object), and must count as traffic.
   bool own_frames_echoed = false;
+  std::vector<NodeSdoChannel> sdo_channels;  // nodes not named here: the default channel
 };
 
 // A frame as the socket delivered it.

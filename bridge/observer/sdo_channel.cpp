@@ -6,12 +6,19 @@ namespace stepnode::bridge {
 
 using namespace od::sdo;
 
-SdoChannel::SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed)
+SdoChannel::SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed,
+                       uint32_t request_id, uint32_t response_id)
     : node_(node),
+      request_id_(request_id ? request_id : od::cob::kSdoRx + node),
+      response_id_(response_id ? response_id : od::cob::kSdoTx + node),
       timeout_us_(timeout_us),
       quiet_us_(quiet_us),
-      echoed_(echoed),
-      client_(std::make_unique<od::SdoClient>(od::cob::kSdoRx + node, od::cob::kSdoTx + node)) {
+      echoed_(echoed) {
+  new_client();
+}
+
+void SdoChannel::new_client() {
+  client_ = std::make_unique<od::SdoClient>(request_id_, response_id_);
   client_->set_timeout_us(timeout_us_);
 }
 
@@ -32,9 +39,14 @@ void SdoChannel::start_upload(uint16_t index, uint8_t sub, uint64_t now_us,
 
 SdoChannel::FrameEvent SdoChannel::on_frame(const od::CanFrame& frame, uint64_t now_us,
                                             std::vector<od::CanFrame>& out) {
-  if (frame.id == od::cob::kSdoRx + node_) return on_request(frame, now_us);
-  if (frame.id == od::cob::kSdoTx + node_) return on_response(frame, now_us, out);
-  return {};
+  if (frame.id == request_id_) return on_request(frame, now_us);
+  if (frame.id == response_id_) return on_response(frame, now_us, out);
+  // On a channel of our own, the default channel is the masters': only their downloads
+  // matter here.
+  FrameEvent ev;
+  if (frame.id == od::cob::kSdoRx + node_) note_download_request(frame);
+  if (frame.id == od::cob::kSdoTx + node_) ev.foreign_download = confirmed_download(frame);
+  return ev;
 }
 
 SdoChannel::FrameEvent SdoChannel::on_request(const od::CanFrame& f, uint64_t now_us) {
@@ -48,7 +60,12 @@ SdoChannel::FrameEvent SdoChannel::on_request(const od::CanFrame& f, uint64_t no
     cancel();
     ev.collision = true;
   }
-  if (f.dlc < 4) return ev;
+  note_download_request(f);
+  return ev;
+}
+
+void SdoChannel::note_download_request(const od::CanFrame& f) {
+  if (f.dlc < 4) return;
   const uint8_t b0 = f.data[0];
   const bool initiate_download = command(b0) == ccs::kDownloadInitiate ||
                                  (command(b0) == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate);
@@ -58,7 +75,6 @@ SdoChannel::FrameEvent SdoChannel::on_request(const od::CanFrame& f, uint64_t no
   } else if (command(b0) == ccs::kAbort) {
     download_pending_ = false;
   }
-  return ev;
 }
 
 SdoChannel::FrameEvent SdoChannel::on_response(const od::CanFrame& f, uint64_t now_us,
@@ -77,13 +93,18 @@ SdoChannel::FrameEvent SdoChannel::on_response(const od::CanFrame& f, uint64_t n
   // Not for us: another master's answer.
   foreign_seen_ = true;
   last_foreign_us_ = now_us;
-  if (!download_pending_ || f.dlc < 4) return ev;
+  ev.foreign_download = confirmed_download(f);
+  return ev;
+}
+
+std::optional<uint16_t> SdoChannel::confirmed_download(const od::CanFrame& f) {
+  if (!download_pending_ || f.dlc < 4) return std::nullopt;
   const uint8_t b0 = f.data[0];
   const bool confirms = command(b0) == scs::kDownloadInitiate ||
                         (command(b0) == scs::kBlockDownload && block_sub(b0) == kBlockInitiate);
-  if (confirms && od::get_u16(&f.data[1]) == download_index_) ev.foreign_download = download_index_;
   download_pending_ = false;  // confirmed or refused: either way this exchange is over
-  return ev;
+  if (confirms && od::get_u16(&f.data[1]) == download_index_) return download_index_;
+  return std::nullopt;
 }
 
 bool SdoChannel::on_tick(uint64_t now_us, std::vector<od::CanFrame>& out) {
@@ -100,15 +121,14 @@ void SdoChannel::cancel() {
   if (!in_flight_) return;
   // SdoClient has no silent cancel (starting anew sends an abort); a fresh client is one
   // allocation on a rare path.
-  client_ = std::make_unique<od::SdoClient>(od::cob::kSdoRx + node_, od::cob::kSdoTx + node_);
-  client_->set_timeout_us(timeout_us_);
+  new_client();
   in_flight_ = false;
 }
 
 void SdoChannel::remember_sent(const std::vector<od::CanFrame>& out, size_t from, uint64_t now_us) {
   if (!echoed_) return;
   for (size_t i = from; i < out.size(); ++i) {
-    if (out[i].id != od::cob::kSdoRx + node_) continue;
+    if (out[i].id != request_id_) continue;
     sent_[sent_next_] = Sent{out[i], now_us, true};
     sent_next_ = (sent_next_ + 1) % sent_.size();
   }

@@ -9,6 +9,9 @@
 //    node's initiate response on 0x580+id) so the caller can re-read what was written,
 //  - ignores the echo of its own requests when the socket loops them back (only when told
 //    so: two bridges reading the same object send identical frames).
+// Given a channel of its own (one of the node's 0x1201..0x1203, CiA 301 7.5.2.33), it
+// reads there and the masters' traffic on the default channel neither delays nor breaks
+// its reads; it still watches the default channel for the masters' confirmed downloads.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -24,7 +27,10 @@ namespace stepnode::bridge {
 class SdoChannel {
  public:
   // `echoed`: our own requests come back from the socket (see ObserverConfig).
-  SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed = false);
+  // `request_id`/`response_id`: the server channel to read on; 0 = the default channel
+  // (0x600+node / 0x580+node).
+  SdoChannel(uint8_t node, uint64_t timeout_us, uint64_t quiet_us, bool echoed = false,
+             uint32_t request_id = 0, uint32_t response_id = 0);
 
   struct FrameEvent {
     bool completed = false;  // our transfer ended (result() holds the answer)
@@ -38,12 +44,14 @@ class SdoChannel {
   // One-off extra quiet time before the next start (random, after a collision).
   void add_quiet(uint64_t extra_us) { extra_quiet_us_ = extra_us; }
   void start_upload(uint16_t index, uint8_t sub, uint64_t now_us, std::vector<od::CanFrame>& out);
-  // A frame on 0x600+id (a client's request) or 0x580+id (the node's response).
+  // A frame on this channel's or the default channel's COB-IDs.
   FrameEvent on_frame(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
   // Times out our transfer; true when it ended (with SdoAbort::Timeout).
   bool on_tick(uint64_t now_us, std::vector<od::CanFrame>& out);
-  // Another master used the channel at `at_us` (seen before this channel existed).
+  // Another master used the default channel at `at_us` (seen before this channel
+  // existed). A channel of our own is not delayed by that.
   void note_foreign(uint64_t at_us) {
+    if (request_id_ != od::cob::kSdoRx + node_) return;
     foreign_seen_ = true;
     last_foreign_us_ = at_us;
   }
@@ -56,8 +64,13 @@ class SdoChannel {
   bool is_own_echo(const od::CanFrame& frame, uint64_t now_us);
   FrameEvent on_request(const od::CanFrame& frame, uint64_t now_us);
   FrameEvent on_response(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
+  void note_download_request(const od::CanFrame& frame);
+  std::optional<uint16_t> confirmed_download(const od::CanFrame& frame);
+  void new_client();
 
   uint8_t node_;
+  uint32_t request_id_;   // client -> server: where our requests go
+  uint32_t response_id_;  // server -> client
   uint64_t timeout_us_;
   uint64_t quiet_us_;
   bool echoed_;

@@ -97,14 +97,6 @@ TEST_F(SdoClientTest, SegmentedUploadWithoutSize) {
   EXPECT_EQ(client.result().data, (Bytes{1, 2, 3, 4, 5, 6, 7, 8, 9}));
 }
 
-TEST_F(SdoClientTest, UploadToggleErrorAborts) {
-  upload(kString, 0, Mode::Auto);
-  feed(rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0}));
-  EXPECT_EQ(feed(rsp({0x10, 's', 't', 'e', 'p', 'n', 'o', 'd'})),
-            one(aborted(kString, 0, 0x05030000)));
-  expect_failed(SdoAbort::ToggleBit);
-}
-
 TEST_F(SdoClientTest, UploadLongerThanIndicatedAborts) {
   upload(kString, 0, Mode::Auto);
   feed(rsp({0x41, 0x06, 0x20, 0x00, 3, 0, 0, 0}));
@@ -155,13 +147,6 @@ TEST_F(SdoClientTest, SegmentedModeNeverUsesExpedited) {
 TEST_F(SdoClientTest, EmptyDownloadIsOneEmptySegment) {
   EXPECT_EQ(download(kDomain, 0, {}, Mode::Auto), one(req({0x21, 0x07, 0x20, 0x00, 0, 0, 0, 0})));
   EXPECT_EQ(feed(rsp({0x60, 0x07, 0x20, 0x00, 0, 0, 0, 0})), one(req({0x0F, 0, 0, 0, 0, 0, 0, 0})));
-}
-
-TEST_F(SdoClientTest, DownloadToggleErrorAborts) {
-  download(kString, 0, encode_string("hello worl"), Mode::Auto);
-  feed(rsp({0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0}));
-  EXPECT_EQ(feed(rsp({0x30, 0, 0, 0, 0, 0, 0, 0})), one(aborted(kString, 0, 0x05030000)));
-  expect_failed(SdoAbort::ToggleBit);
 }
 
 // ---- block download ----
@@ -329,20 +314,101 @@ TEST_F(SdoClientTest, TimeoutCountsFromTheLastResponse) {
   EXPECT_EQ(out, one(aborted(kString, 0, 0x05040000)));
 }
 
-TEST_F(SdoClientTest, UnexpectedCommandAborts) {
+// ---- responses that are not ours (another client on the channel, CiA 301 7.2.4.1) ----
+
+TEST_F(SdoClientTest, ExpeditedReplyNamingAnotherObjectIsIgnored) {
   upload(kU32, 0, Mode::Auto);
-  EXPECT_EQ(feed(rsp({0x60, 0x02, 0x20, 0x00, 0, 0, 0, 0})), one(aborted(kU32, 0, 0x05040001)));
-  expect_failed(SdoAbort::BadCommand);
-  download(kU32, 0, {1, 2, 3, 4}, Mode::Auto);
-  EXPECT_EQ(feed(rsp({0xE0, 0, 0, 0, 0, 0, 0, 0})), one(aborted(kU32, 0, 0x05040001)));
-  download(kU32, 0, {1, 2, 3, 4}, Mode::Auto);
-  EXPECT_EQ(feed(CanFrame(kTx, {0x60, 0x02, 0x20, 0x00})), one(aborted(kU32, 0, 0x05040001)));
+  // 7.2.4.3.6: 0x43 = scs 2, e, s, n = 0; multiplexer 0x2003:00 is not our 0x2002:00.
+  EXPECT_TRUE(feed(rsp({0x43, 0x03, 0x20, 0x00, 1, 2, 3, 4})).empty());
+  EXPECT_FALSE(client.done());
+  EXPECT_TRUE(feed(rsp({0x43, 0x02, 0x20, 0x00, 0x78, 0x56, 0x34, 0x12})).empty());
+  ASSERT_TRUE(client.result().ok());
+  EXPECT_EQ(client.result().data, (Bytes{0x78, 0x56, 0x34, 0x12}));
+  EXPECT_EQ(client.result().foreign_replies, 1u);
 }
 
-TEST_F(SdoClientTest, ResponseForAnotherObjectAborts) {
+TEST_F(SdoClientTest, DownloadConfirmationNamingAnotherObjectIsIgnored) {
+  download(kU32, 0, {1, 2, 3, 4}, Mode::Auto);
+  EXPECT_TRUE(feed(rsp({0x60, 0x01, 0x20, 0x00, 0, 0, 0, 0})).empty());  // 0x2001:00
+  EXPECT_TRUE(feed(rsp({0x60, 0x02, 0x20, 0x01, 0, 0, 0, 0})).empty());  // 0x2002:01
+  EXPECT_FALSE(client.done());
+  feed(rsp({0x60, 0x02, 0x20, 0x00, 0, 0, 0, 0}));
+  EXPECT_TRUE(client.result().ok());
+  EXPECT_EQ(client.result().foreign_replies, 2u);
+}
+
+TEST_F(SdoClientTest, WrongCommandSpecifierForThePhaseIsIgnored) {
   upload(kU32, 0, Mode::Auto);
-  EXPECT_EQ(feed(rsp({0x43, 0x03, 0x20, 0x00, 1, 2, 3, 4})), one(aborted(kU32, 0, 0x06040043)));
-  expect_failed(SdoAbort::ParameterIncompatible);
+  // A download confirmation (scs 3) and an upload segment (scs 0) answer another request.
+  EXPECT_TRUE(feed(rsp({0x60, 0x02, 0x20, 0x00, 0, 0, 0, 0})).empty());
+  EXPECT_TRUE(feed(rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'})).empty());
+  EXPECT_TRUE(feed(rsp({0xE0, 0, 0, 0, 0, 0, 0, 0})).empty());  // scs 7: none at all
+  EXPECT_FALSE(client.done());
+  feed(rsp({0x4B, 0x02, 0x20, 0x00, 0x34, 0x12, 0, 0}));  // n = 2: two bytes
+  EXPECT_EQ(client.result().data, (Bytes{0x34, 0x12}));
+  EXPECT_EQ(client.result().foreign_replies, 3u);
+}
+
+TEST_F(SdoClientTest, ShortFrameIsStillAProtocolError) {
+  download(kU32, 0, {1, 2, 3, 4}, Mode::Auto);
+  // 7.2.4.3.1: every SDO frame has 8 bytes.
+  EXPECT_EQ(feed(CanFrame(kTx, {0x60, 0x02, 0x20, 0x00})), one(aborted(kU32, 0, 0x05040001)));
+  expect_failed(SdoAbort::BadCommand);
+}
+
+TEST_F(SdoClientTest, UploadSegmentWithTheWrongToggleIsIgnored) {
+  upload(kString, 0, Mode::Auto);
+  EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0})), one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
+  // 7.2.4.3.7: the answer to a request with t = 0 has t = 0; 0x10 (t = 1) is not it.
+  EXPECT_TRUE(feed(rsp({0x10, 'x', 'x', 'x', 'x', 'x', 'x', 'x'})).empty());
+  EXPECT_EQ(feed(rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'})), one(req({0x70, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_TRUE(feed(rsp({0x0D, 'y', 0, 0, 0, 0, 0, 0})).empty());  // t = 0 again: stale
+  feed(rsp({0x1D, 'e', 0, 0, 0, 0, 0, 0}));  // t = 1, n = 6, c
+  ASSERT_TRUE(client.result().ok());
+  EXPECT_EQ(client.result().data, encode_string("stepnode"));
+  EXPECT_EQ(client.result().foreign_replies, 2u);
+}
+
+TEST_F(SdoClientTest, DownloadSegmentConfirmationWithTheWrongToggleIsIgnored) {
+  download(kString, 0, encode_string("hello worl"), Mode::Auto);
+  feed(rsp({0x60, 0x06, 0x20, 0x00, 0, 0, 0, 0}));
+  // 7.2.4.3.4: the confirmation of segment t = 0 is 0x20; 0x30 (t = 1) belongs elsewhere.
+  EXPECT_TRUE(feed(rsp({0x30, 0, 0, 0, 0, 0, 0, 0})).empty());
+  EXPECT_EQ(feed(rsp({0x20, 0, 0, 0, 0, 0, 0, 0})), one(req({0x19, 'o', 'r', 'l', 0, 0, 0, 0})));
+  feed(rsp({0x30, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_TRUE(client.result().ok());
+}
+
+TEST_F(SdoClientTest, AbortNamingAnotherObjectIsIgnored) {
+  upload(kU32, 0, Mode::Auto);
+  EXPECT_TRUE(feed(abort_of(kTx, kU16, 0, 0x06010001)).empty());
+  EXPECT_FALSE(client.done());
+  EXPECT_TRUE(feed(abort_of(kTx, kU32, 0, 0x06020000)).empty());
+  expect_failed(SdoAbort::NoObject, true);
+  EXPECT_EQ(client.result().foreign_replies, 1u);
+}
+
+TEST_F(SdoClientTest, BlockUploadInitiateForAnotherObjectIsIgnored) {
+  upload(kDomain, 0, Mode::Block);
+  // 7.2.4.3.12: 0xC6 = scs 6, sc, s, ss 0; 0x2006 is not our 0x2007.
+  EXPECT_TRUE(feed(rsp({0xC6, 0x06, 0x20, 0x00, 10, 0, 0, 0})).empty());
+  EXPECT_EQ(feed(rsp({0xC6, 0x07, 0x20, 0x00, 10, 0, 0, 0})), one(req({0xA3, 0, 0, 0, 0, 0, 0, 0})));
+}
+
+TEST_F(SdoClientTest, TimeoutAfterForeignRepliesSaysTheChannelWasBusy) {
+  client.set_timeout_us(5000);
+  upload(kU32, 0, Mode::Auto);
+  Frames out;
+  for (now = 1000; now <= 4000; now += 1000) feed(rsp({0x43, 0x03, 0x20, 0x00, 1, 2, 3, 4}));
+  client.on_tick(4999, out);
+  EXPECT_TRUE(out.empty());  // foreign replies do not restart the timeout
+  client.on_tick(5000, out);
+  EXPECT_EQ(out, one(aborted(kU32, 0, 0x05040000)));
+  expect_failed(SdoAbort::Timeout);
+  EXPECT_EQ(client.result().foreign_replies, 4u);
+  upload(kU32, 0, Mode::Auto);  // the next transfer counts anew
+  feed(rsp({0x43, 0x02, 0x20, 0x00, 1, 2, 3, 4}));
+  EXPECT_EQ(client.result().foreign_replies, 0u);
 }
 
 TEST_F(SdoClientTest, FramesOnOtherCobIdsAreIgnored) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "od/sdo_abort.hpp"
@@ -149,6 +150,10 @@ int main(int argc, char** argv) {
   app.add_option("--iface", iface, "SocketCAN interface")->capture_default_str();
   app.add_option("--eds", eds, "EDS file describing the node's objects (default: stepnode's own)");
   app.add_option("--timeout", timeout_ms, "SDO / confirmation timeout in ms")->capture_default_str();
+  std::string sdo_cob_ids;
+  app.add_option("--sdo-cob-ids", sdo_cob_ids,
+                 "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
+                 "0x1201..0x1203 sub 1 and 2 (e.g. 0x695,0x6D5); default: 0x600+id,0x580+id (0x1200)");
 
   std::string nmt_what;
   int node = -1;
@@ -221,8 +226,11 @@ int main(int argc, char** argv) {
     ObjectCatalog catalog(eds);
     if (*watch) return run_watch(iface, catalog, passive, seconds);
     if (*hp) plan_hp_words(hp_words, static_cast<unsigned>(hp_channel));  // bad words: exit 2 before the bus
+    std::optional<SdoCobIds> channel;
+    if (!sdo_cob_ids.empty()) channel = parse_sdo_cob_ids(sdo_cob_ids);  // bad: exit 2 before the bus
     MasterBus bus(iface);
     bus.set_sdo_timeout_ms(timeout_ms);
+    if (channel) bus.set_sdo_cob_ids(*channel);
     if (*nmt) return cmd_nmt(bus, nmt_what, node, timeout_ms);
     if (*read) return cmd_read(bus, catalog, node, object, block, output);
     if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
@@ -239,6 +247,9 @@ int main(int argc, char** argv) {
       }
     }
   } catch (const Failure& e) {
+    std::fprintf(stderr, "stepctl: %s\n", e.what());
+    return 1;
+  } catch (const SdoChannelBusy& e) {  // a runtime failure, not bad arguments
     std::fprintf(stderr, "stepctl: %s\n", e.what());
     return 1;
   } catch (const std::exception& e) {

@@ -2,14 +2,43 @@
 
 #include <poll.h>
 
+#include <chrono>
 #include <ctime>
+#include <thread>
+
+#include "od/cob_id.hpp"
 
 namespace stepnode::tools {
+namespace {
+
+// Aborts a second client on the channel provokes (the server saw a request out of its
+// sequence, or waited for a segment the other client never sent), and our own timeout.
+bool protocol_failure(od::SdoAbort a) {
+  return a == od::SdoAbort::Timeout || a == od::SdoAbort::BadCommand ||
+         a == od::SdoAbort::ToggleBit || a == od::SdoAbort::General;
+}
+
+uint32_t parse_cob_id(const std::string& text) {
+  if (auto id = od::parse_can_id(text)) return *id;
+  throw std::invalid_argument("--sdo-cob-ids: '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
+}
+
+}  // namespace
 
 uint64_t monotonic_us() {
   timespec ts;
   ::clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000u + static_cast<uint64_t>(ts.tv_nsec) / 1000;
+}
+
+SdoCobIds parse_sdo_cob_ids(const std::string& text) {
+  const size_t comma = text.find(',');
+  if (comma == std::string::npos)
+    throw std::invalid_argument("--sdo-cob-ids: '" + text + "': give CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 0x695,0x6D5)");
+  SdoCobIds ids{parse_cob_id(text.substr(0, comma)), parse_cob_id(text.substr(comma + 1))};
+  if (ids.client_to_server == ids.server_to_client)
+    throw std::invalid_argument("--sdo-cob-ids: the two COB-IDs must differ");
+  return ids;
 }
 
 MasterBus::MasterBus(const std::string& iface) : can_(iface) {}
@@ -30,9 +59,12 @@ std::optional<canio::ReceivedFrame> MasterBus::receive(int timeout_ms) {
   }
 }
 
+// `disturbed`: another client used the channel during the transfer: its requests on our
+// request COB-ID (the socket does not hand us our own frames), or answers to them.
 template <class Start>
-od::SdoResult MasterBus::run(uint8_t node, Start start) {
-  od::SdoClient client(od::cob::kSdoRx + node, od::cob::kSdoTx + node);
+od::SdoResult MasterBus::run(uint8_t node, Start start, bool& disturbed) {
+  const SdoCobIds ids = cob_ids_.value_or(SdoCobIds{od::cob::kSdoRx + node, od::cob::kSdoTx + node});
+  od::SdoClient client(ids.client_to_server, ids.server_to_client);
   client.set_timeout_us(static_cast<uint64_t>(sdo_timeout_ms_) * 1000);
   // Frames that queued up before this transfer are not its answers (and a socket left
   // unread for long may have filled its buffer): start from an empty queue.
@@ -41,27 +73,44 @@ od::SdoResult MasterBus::run(uint8_t node, Start start) {
   std::vector<od::CanFrame> out;
   start(client, out);
   for (const auto& f : out) can_.send(f);
+  bool foreign_request = false;
   while (!client.done()) {
     out.clear();
-    if (auto r = receive(5)) client.on_frame(r->frame, monotonic_us(), out);
+    if (auto r = receive(5)) {
+      foreign_request |= r->frame.id == ids.client_to_server;
+      client.on_frame(r->frame, monotonic_us(), out);
+    }
     client.on_tick(monotonic_us(), out);
     for (const auto& f : out) can_.send(f);
   }
   can_.flush();
-  return client.result();
+  const od::SdoResult& r = client.result();
+  disturbed = !r.ok() && protocol_failure(r.abort) && (foreign_request || r.foreign_replies > 0);
+  return r;
 }
 
 od::SdoResult MasterBus::upload(uint8_t node, uint16_t index, uint8_t sub, od::SdoClient::Mode mode) {
-  return run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
-    c.start_upload(index, sub, mode, monotonic_us(), out);
-  });
+  for (int attempt = 1;; ++attempt) {
+    bool disturbed = false;
+    od::SdoResult r = run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
+      c.start_upload(index, sub, mode, monotonic_us(), out);
+    }, disturbed);
+    if (!disturbed) return r;
+    if (attempt == kReadAttempts) throw SdoChannelBusy(node);
+    // A read changes nothing, so it may go again; a pause that differs per attempt keeps
+    // two clients from meeting again in step.
+    std::this_thread::sleep_for(std::chrono::milliseconds(20 * attempt + monotonic_us() % 30));
+  }
 }
 
 od::SdoResult MasterBus::download(uint8_t node, uint16_t index, uint8_t sub, od::Bytes data,
                                   od::SdoClient::Mode mode) {
-  return run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
+  bool disturbed = false;
+  od::SdoResult r = run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
     c.start_download(index, sub, std::move(data), mode, monotonic_us(), out);
-  });
+  }, disturbed);
+  if (disturbed) throw SdoChannelBusy(node);
+  return r;
 }
 
 }  // namespace stepnode::tools

@@ -92,5 +92,36 @@ TEST(BridgeConfig, BadInputIsOneLineNamingTheProblem) {
   std::filesystem::remove(zero);
 }
 
+TEST(BridgeConfig, SdoChannelsFromTheCommandLineAndTheFile) {
+  auto cfg = parse({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x6C5", "--sdo-channel", "6:0x686,1734"});
+  ASSERT_EQ(cfg.sdo_channels.size(), 2u);
+  EXPECT_EQ(cfg.sdo_channels[0].node, 5);
+  EXPECT_EQ(cfg.sdo_channels[0].client_to_server, 0x685u);
+  EXPECT_EQ(cfg.sdo_channels[0].server_to_client, 0x6C5u);
+  EXPECT_EQ(cfg.sdo_channels[1].server_to_client, 1734u);
+  auto file = write_file("channels.toml", "iface = \"can0\"\n[sdo_channels]\n5 = [0x685, 0x6C5]\n");
+  cfg = parse({"--config", file});
+  ASSERT_EQ(cfg.sdo_channels.size(), 1u);
+  EXPECT_EQ(cfg.sdo_channels[0].node, 5);
+  EXPECT_EQ(cfg.sdo_channels[0].server_to_client, 0x6C5u);
+  EXPECT_EQ(parse({"--config", file, "--sdo-channel", "7:0x687,0x6C7"}).sdo_channels.at(0).node, 7)
+      << "the command line wins";
+  std::filesystem::remove(file);
+}
+
+TEST(BridgeConfig, BadSdoChannelsAreOneLine) {
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5"}),
+            "--sdo-channel 5: give NODE:CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 5:0x685,0x6C5)");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "0:0x685,0x6C5"}), "--sdo-channel 0:0x685,0x6C5: node must be 1..127");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x800"}),
+            "--sdo-channel 5:0x685,0x800: '0x800' is not an 11-bit CAN-ID (1..0x7FF)");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x685"}),
+            "--sdo-channel 5:0x685,0x685: the two COB-IDs must differ");
+  auto file = write_file("badchannels.toml", "iface = \"can0\"\n[sdo_channels]\n5 = 0x685\n");
+  EXPECT_EQ(error_of({"--config", file}),
+            "config " + file + ": sdo_channels.5: must be [CLIENT_TO_SERVER, SERVER_TO_CLIENT]");
+  std::filesystem::remove(file);
+}
+
 }  // namespace
 }  // namespace stepnode::bridge

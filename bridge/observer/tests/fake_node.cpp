@@ -28,7 +28,9 @@ void build_third_party(od::Dictionary& d, const FakeNodeOptions& o) {
 }  // namespace
 
 FakeNode::FakeNode(FakeNodeOptions options)
-    : options_(std::move(options)), server_(od_, od::cob::kSdoTx + options_.id) {
+    : options_(std::move(options)),
+      server_(od_, od::cob::kSdoTx + options_.id),
+      channel_server_(od_, options_.channel_tx) {
   if (!options_.stepnode) {
     build_third_party(od_, options_);
     return;
@@ -57,6 +59,10 @@ FakeNode::FakeNode(FakeNodeOptions options)
 }
 
 void FakeNode::on_frame(const od::CanFrame& f, uint64_t now_us, std::vector<od::CanFrame>& out) {
+  if (options_.channel_rx && f.id == options_.channel_rx) {
+    ++requests_seen;
+    return channel_server_.on_request(f, now_us, out);
+  }
   if (f.id != od::cob::kSdoRx + id()) return;
   ++requests_seen;
   if (silent) return;

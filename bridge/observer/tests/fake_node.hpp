@@ -25,6 +25,8 @@ struct FakeNodeOptions {
   // Third-party device only:
   uint32_t product_code = 0x00001234;
   bool has_2001 = true;       // its own (non-axis) object at 0x2001
+  // A second SDO server channel (as 0x1201 configured): client->server, server->client.
+  uint32_t channel_rx = 0, channel_tx = 0;
 };
 
 class FakeNode {
@@ -34,7 +36,8 @@ class FakeNode {
   uint8_t id() const { return options_.id; }
   od::Dictionary& dictionary() { return od_; }
 
-  // A request frame from the bus (only 0x600+id is looked at); responses go to `out`.
+  // A request frame from the bus (only 0x600+id and channel_rx are looked at); responses
+  // go to `out`.
   void on_frame(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
 
   od::CanFrame boot_up() const { return od::CanFrame(0x700 + id(), {0x00}); }
@@ -59,6 +62,7 @@ class FakeNode {
   FakeNodeOptions options_;
   od::Dictionary od_;
   od::SdoServer server_;
+  od::SdoServer channel_server_;  // its own transfer state, as on a real node
 };
 
 }  // namespace stepnode::bridge::test
