@@ -174,12 +174,18 @@ void SdoServer::State::fail(SdoAbort code, std::vector<CanFrame>& out) {
 }
 
 // An abort for a request outside a transfer names the multiplexer the request carried
-// (as far as its DLC goes); inside a transfer, the transfer's.
+// (as far as its DLC goes); inside a transfer, the transfer's. Only initiate requests
+// carry one (CiA 301 7.2.4.3): in a stray segment, sub-block end or ack, bytes 1..3 are
+// data, so its abort names 0000:00 rather than an object made of those bytes.
 void SdoServer::State::reject(const CanFrame& req, SdoAbort code, std::vector<CanFrame>& out) {
   if (t.phase == Phase::Idle) {
-    t.index = static_cast<uint16_t>((req.dlc > 1 ? req.data[1] : 0) |
-                                    (req.dlc > 2 ? req.data[2] << 8 : 0));
-    t.sub = req.dlc > 3 ? req.data[3] : 0;
+    const uint8_t b0 = req.dlc >= 1 ? req.data[0] : 0;
+    const uint8_t cs = command(b0);
+    const bool multiplexed = req.dlc >= 1 && (cs == ccs::kDownloadInitiate || cs == ccs::kUploadInitiate ||
+                                              (cs == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate) ||
+                                              (cs == ccs::kBlockUpload && block_sub(b0) == kBlockInitiate));
+    t.index = multiplexed ? static_cast<uint16_t>((req.dlc > 1 ? req.data[1] : 0) | (req.dlc > 2 ? req.data[2] << 8 : 0)) : 0;
+    t.sub = multiplexed && req.dlc > 3 ? req.data[3] : 0;
   }
   fail(code, out);
 }

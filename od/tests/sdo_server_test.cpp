@@ -311,11 +311,15 @@ TEST_F(SdoServerTest, TimeoutCountsFromTheLastRequest) {
 }
 
 TEST_F(SdoServerTest, AbortBadCommandSpecifier) {
-  EXPECT_EQ(ask(req({0xE0, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kU8, 0, 0x05040001));
-  EXPECT_EQ(ask(req({0x00, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kU8, 0, 0x05040001));
-  EXPECT_EQ(ask(req({0x60, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kU8, 0, 0x05040001));
-  EXPECT_EQ(ask(req({0xA3, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kU8, 0, 0x05040001));
-  EXPECT_EQ(ask(req({0xC1, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kU8, 0, 0x05040001));
+  // Outside a transfer, a frame with no multiplexer (ccs 7, a download or upload segment, a
+  // block end) is aborted naming 0000:00: its bytes 1..3 are data, not an object (they
+  // named a bogus object before).
+  EXPECT_EQ(ask(req({0xE0, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(0, 0, 0x05040001));
+  EXPECT_EQ(ask(req({0x00, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(0, 0, 0x05040001));
+  EXPECT_EQ(ask(req({0x0E, 0x34, 0x12, 0x56, 0x78, 0, 0, 0})), aborted(0, 0, 0x05040001));
+  EXPECT_EQ(ask(req({0x60, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(0, 0, 0x05040001));
+  EXPECT_EQ(ask(req({0xA3, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(0, 0, 0x05040001));
+  EXPECT_EQ(ask(req({0xC1, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(0, 0, 0x05040001));
   // In a transfer the abort names the transfer's object and ends it.
   ask(req({0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0}));
   EXPECT_EQ(ask(req({0x00, 0x00, 0x20, 0x00, 0, 0, 0, 0})), aborted(kString, 0, 0x05040001));
