@@ -114,11 +114,12 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
   emcy_.reset();
   if (!report.problem()) return;
   // Manufacturer bytes: the first refused entry (index little-endian, sub), how many were
-  // refused (at most 255), 1 if the whole file was damaged and set aside.
+  // refused (at most 255), and the file: 0 good, 1 damaged and set aside, 2 damaged and
+  // it could not be renamed.
   ParameterStore::Key key = report.first_refused.value_or(ParameterStore::Key{0, 0});
   emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
                {static_cast<uint8_t>(key.first), static_cast<uint8_t>(key.first >> 8), key.second,
-                static_cast<uint8_t>(std::min(report.refused, 255u)), static_cast<uint8_t>(report.set_aside ? 1 : 0)},
+                static_cast<uint8_t>(std::min(report.refused, 255u)), static_cast<uint8_t>(!report.damaged ? 0 : report.set_aside ? 1 : 2)},
                now_us);
 }
 

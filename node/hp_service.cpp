@@ -1,5 +1,7 @@
 #include "node/hp_service.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -16,9 +18,6 @@ namespace {
 double real(std::span<const uint8_t> d) { return od::decode<double>(d); }
 uint8_t u8(std::span<const uint8_t> d) { return od::decode<uint8_t>(d); }
 
-// A MOVE whose step count a double holds exactly (|steps| <= 2^53). Beyond that (1e300, or
-// 1e10 at PSCALE 1e-300) PositionCounter's llround overflows and the move "completes"
-// at once without a step; NaN and infinities fail the comparison too.
 // Appendix A: "Total number output pulses/channel in MOVE mode: ±2,147,483,647". A MOVE of
 // more (1e300 units, or 1e10 at PSCALE 1e-300) is a range abort, not a move.
 bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
@@ -182,13 +181,22 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   hp::Channel& ch = *channels_[a];
   uint16_t p = index(a, kProfile), out = index(a, kOutput), lim = index(a, kLimits);
   auto g8 = [&](uint16_t i, uint8_t s) { return dictionary_.get<uint8_t>(i, s); };
-  // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3); one that
-  // conflicts leaves the power-on profile.
-  ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, od::hp_profile_sub::kMode)),
-                         dictionary_.get<double>(p, od::hp_profile_sub::kMin), dictionary_.get<double>(p, od::hp_profile_sub::kMax),
-                         dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
-                         dictionary_.get<double>(p, od::hp_profile_sub::kLast)},
-             t);
+  // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3). One the
+  // channel refuses (stored by a build with other limits) leaves the power-on profile, and
+  // its objects show that one again; EMCY 0x5530 says a stored value was refused.
+  hp::Conflict c = ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, od::hp_profile_sub::kMode)),
+                                          dictionary_.get<double>(p, od::hp_profile_sub::kMin),
+                                          dictionary_.get<double>(p, od::hp_profile_sub::kMax),
+                                          dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
+                                          dictionary_.get<double>(p, od::hp_profile_sub::kLast)},
+                              t);
+  if (c != hp::Conflict::None) {
+    spdlog::warn("stored PROFILE of HP channel {} is refused (conflict row {}); the power-on profile applies", a,
+                 static_cast<int>(c));
+    dictionary_.reset_to_defaults(p, p);
+    emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
+                 {static_cast<uint8_t>(p), static_cast<uint8_t>(p >> 8), 0, 1, 0}, now_us_);
+  }
   double s = dictionary_.get<double>(index(a, kPscale), 0);
   if (s != 0 && std::isfinite(s)) ch.pscale(s);
   ch.delay(dictionary_.get<uint16_t>(index(a, kDelay), 0));

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -79,14 +80,19 @@ ParameterStore::Contents ParameterStore::read_file() const {
   const std::string text = whole.str();
   // Version 2 ends with the checksum of everything before its line; version 1 has none.
   std::string_view body = text;
-  const bool v1 = body.starts_with(kHeaderV1) && body.size() > kHeaderV1.size() && body[kHeaderV1.size()] == '\n';
-  if (!v1) {
+  auto header_line = [&](std::string_view header) {
+    if (!body.starts_with(header)) return false;
+    std::string_view rest = body.substr(header.size());
+    return rest.empty() || rest.starts_with("\n") || rest.starts_with("\r\n");
+  };
+  if (!header_line(kHeaderV1)) {
     const size_t last = body.rfind(kCrcPrefix);
-    unsigned stored = 0;
-    char tail = 0;
-    if (!body.starts_with(kHeader) || last == std::string_view::npos ||
-        std::sscanf(text.c_str() + last + kCrcPrefix.size(), "%8x%c", &stored, &tail) != 2 || tail != '\n' ||
-        last + kCrcPrefix.size() + 9 != text.size() || crc32(body.substr(0, last)) != stored) {
+    const size_t digits = last + kCrcPrefix.size();
+    uint32_t stored = 0;
+    const bool crc_line = last != std::string_view::npos && digits + 9 == text.size() && text.back() == '\n' &&
+                          std::from_chars(text.data() + digits, text.data() + digits + 8, stored, 16).ptr ==
+                              text.data() + digits + 8;
+    if (!header_line(kHeader) || !crc_line || crc32(body.substr(0, last)) != stored) {
       out.damaged = true;
       return out;
     }
@@ -115,15 +121,16 @@ ParameterStore::Contents ParameterStore::read_file() const {
 
 std::optional<std::filesystem::path> ParameterStore::set_aside() const {
   // Kept for whoever wants to look at it, under the first free name.
-  for (int n = 1; n < 1000; ++n) {
+  for (int n = 1; n <= 1000; ++n) {
     std::filesystem::path to = with_suffix(file_, ".corrupt-" + std::to_string(n));
     std::error_code ec;
     if (std::filesystem::exists(to, ec)) continue;
     std::filesystem::rename(file_, to, ec);
     if (!ec) return to;
     spdlog::error("cannot set aside {}: {}", file_.string(), ec.message());
-    break;
+    return std::nullopt;
   }
+  spdlog::error("cannot set aside {}: {}.corrupt-1..1000 all exist", file_.string(), file_.string());
   return std::nullopt;
 }
 
@@ -192,7 +199,7 @@ ParameterStore::LoadReport ParameterStore::load_into_dictionary(uint16_t first, 
     spdlog::error("{} is not a valid stepnode parameter file (damaged or foreign): set aside, defaults apply",
                   file_.string());
     report.set_aside = set_aside();
-    if (!report.set_aside) report.set_aside = file_;  // could not rename: still reported
+    report.damaged = true;
     return report;
   }
   for (const auto& [key, bytes] : stored.values) {

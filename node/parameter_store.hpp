@@ -23,13 +23,14 @@ class ParameterStore {
 
   // What a load found: the node reports a problem as EMCY 0x5530 (data storage).
   struct LoadReport {
-    std::optional<std::filesystem::path> set_aside;  // a corrupt or foreign file, renamed
+    bool damaged = false;                            // a corrupt or foreign file: not loaded
+    std::optional<std::filesystem::path> set_aside;  // ... and renamed to this (if it could be)
     unsigned refused = 0;                            // stored values the dictionary refused
     std::optional<Key> first_refused;
     void refuse(Key key) {
       if (refused++ == 0) first_refused = key;
     }
-    bool problem() const { return set_aside || refused > 0; }
+    bool problem() const { return damaged || refused > 0; }
   };
 
   ParameterStore(od::Dictionary& dictionary, std::filesystem::path file);

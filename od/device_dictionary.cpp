@@ -224,7 +224,7 @@ void add_user_objects(Dictionary& od) {
 }
 
 void add_diagnostic_objects(Dictionary& od) {
-  // How many received frames the CAN socket's queue dropped since the node started (the
+  // How many received frames the CAN socket's queue dropped since the last reset node (the
   // kernel's SO_RXQ_OVFL count); each increase also goes out as EMCY 0x8110.
   od.var(kReceiveOverruns, "CAN frames dropped at the socket", DT::Unsigned32, AC::ReadOnly,
          encode<uint32_t>(0), true);

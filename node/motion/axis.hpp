@@ -77,7 +77,9 @@ class Axis {
   bool busy() const { return job_ != Job::None || generator_.moving() || waiting_for_limit_release_; }
   bool external_job() const { return job_ == Job::External; }
   void start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
-  void external_velocity(Tick now, int64_t level) { generator_.change_velocity(now, level); }
+  void external_velocity(Tick now, int64_t level, std::optional<RampSpec> then = std::nullopt) {
+    generator_.change_velocity(now, level, std::move(then));
+  }
   void external_regrid(Tick now, const RampSpec& ramp) { generator_.regrid(now, ramp); }
   void external_stop(Tick now) { generator_.stop(now); }
   void external_halt(Tick now);  // no ramp, no end report: the front end knows why

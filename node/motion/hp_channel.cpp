@@ -137,6 +137,10 @@ Error Channel::move(double distance, bool absolute, bool nowait, Tick now) {
   if (blocking_ || run_ != Run::Idle || start_at_ || axis_.busy()) return accept(Error::AccessoryBusy);
   if (Error e = check_can_move(false); e != Error::None) return accept(e);
   int64_t steps = absolute ? position_.abs_steps(distance, axis_.motor_position()) : position_.rel_steps(distance);
+  // A move that would outlast the engine's 64-bit clock (2^31 pulses at a 2.5 µHz maximum:
+  // 27 million years) is refused: its deceleration tick overflowed.
+  if (std::fabs(static_cast<double>(steps)) / std::max(profile_.max, kRateResolutionHz) > kLongestMoveS)
+    return Error::ValueOutOfRange;
   return arm(Pending{Action::Move, steps, 0}, nowait, now);
 }
 
@@ -262,6 +266,9 @@ void Channel::start_sustain_rate(double rate, Tick at) {
   }
   int dir = rate > 0 ? +1 : -1;
   double target = clamp_to_profile(profile_, std::fabs(rate));
+  // Checked when given, and again now: a PROFILE given while it waited for its trigger
+  // may have moved the clamp below the rate resolution (a 0 maximum).
+  if (!width && target < kRateResolutionHz) return;
   sustain_reached_ = false;
   if (run_ == Run::Sustain) {
     if (dir != direction_) return (void)accept(Error::MustStopToChangeDirection);
@@ -271,7 +278,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_target_ = target;
     } else {
       sustain_rate_ = target;
-      axis_.external_velocity(at, sustain_level(target, at));
+      change_sustain_velocity(target, at);
     }
     return;
   }
@@ -297,17 +304,27 @@ void Channel::start_sustain_rate(double rate, Tick at) {
   }
 }
 
-int64_t Channel::sustain_level(double target, Tick at) {
-  // The running ramp's levels were sized for the first SUSTAIN rate. When they are much
-  // finer than a ramp made for the new rate would use (SUSTAIN 2.5E-6 then SUSTAIN 100:
-  // 4e7 levels of one tick each, minutes of CPU), the motion moves to the new rate's grid
-  // first; otherwise it stays on its grid (as before: exact to half a level). A rate
-  // below one level of a coarse grid holds one level (StepGenerator::change_velocity).
+void Channel::change_sustain_velocity(double target, Tick at) {
+  // The running ramp's levels were sized for the first SUSTAIN rate.
   const RampSpec fresh = freq_ramp(profile_, target);
   const RampSpec& running = axis_.generator().ramp();
-  if (running.phase_per_step <= 16 * fresh.phase_per_step) return level_of(running, target);
-  axis_.external_regrid(at, fresh);
-  return fresh.run_level;
+  // Much finer than a ramp made for the new rate (SUSTAIN 2.5E-6, then SUSTAIN 100: 4e7
+  // levels of one tick each, minutes of CPU): move to the new rate's grid, then ramp.
+  if (running.phase_per_step > 16 * fresh.phase_per_step) {
+    axis_.external_regrid(at, fresh);
+    return axis_.external_velocity(at, fresh.run_level);
+  }
+  // A level of the running grid within appendix A's 0.01 % of the rate: ramp to it.
+  const double level_hz = running.velocity_of(1);
+  const int64_t nearest = level_of(running, target);
+  if (nearest >= 1 && std::fabs(running.velocity_of(nearest) - target) <= 1e-4 * target)
+    return axis_.external_velocity(at, nearest);
+  // Otherwise (a coarse grid: at 1 MHz/s a level is 13 Hz) ramp on it to the last level
+  // short of the rate, then hold the rate exactly on the new rate's grid.
+  const double current = axis_.generator().velocity();
+  const double levels = target / level_hz;
+  const int64_t approach = std::max<int64_t>(1, static_cast<int64_t>(target < current ? std::ceil(levels) : std::floor(levels)));
+  axis_.external_velocity(at, approach, fresh);
 }
 
 void Channel::halt_sgl(Tick now) {

@@ -111,7 +111,7 @@ class Channel {
   void start(Tick at);
   void start_move_steps(int64_t steps, Tick at);
   void start_sustain_rate(double rate, Tick at);
-  int64_t sustain_level(double target, Tick at);
+  void change_sustain_velocity(double target, Tick at);
   double current_width_at(Tick t) const;
   void end(Done how, uint8_t event, Tick at);
   void interrupt(uint8_t event, Tick at);

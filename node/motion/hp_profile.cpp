@@ -74,12 +74,14 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   }
   r.decel_ticks_per_level = r.accel_ticks_per_level;
   int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * per_hz);
-  r.min_creep_level = std::max<int64_t>({int64_t{1}, r.base_level, one_step});
+  // ... but never faster than the run rate: PROFILE FREQ 10 10 500 crept at 31.6 Hz.
+  r.min_creep_level = std::min(std::max<int64_t>({int64_t{1}, r.base_level, one_step}), std::max<int64_t>(1, r.run_level));
   r.horner_triangle_rule = false;
   // The engine's invariants (checked in the sanitizer build): every rate the PROFILE and
   // SUSTAIN checks accept gives a positive step size far from int64 overflow.
   assert(r.phase_per_step > 0 && r.phase_per_step < (int64_t{1} << 52));
   assert(r.base_level >= 0 && r.base_level <= r.run_level + 1 && r.min_creep_level >= 1);
+  assert(r.min_creep_level <= std::max<int64_t>(1, r.run_level));
   return r;
 }
 

@@ -79,6 +79,8 @@ constexpr double kTimeResolutionS = 1e-6;
 // under 100 µs is out of range too.
 constexpr double kRateResolutionHz = 2.5e-6;
 constexpr double kMinPeriodS = 1.0 / kMaxPulseRateHz;
+// The longest move the engine's tick clock (int64 at 4.9152 MHz) holds, with margin: 2^60 ticks.
+constexpr double kLongestMoveS = 1.152921504606846976e18 / 4.9152e6;
 constexpr uint16_t kMaxDelayMs = 65'535;  // DELAY 0.000..65.535 s in 1 ms steps (3-14)
 
 }  // namespace stepnode::motion::hp

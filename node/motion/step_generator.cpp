@@ -1,6 +1,7 @@
 #include "node/motion/step_generator.hpp"
 
 #include <algorithm>
+#include <cassert>
 
 namespace stepnode::motion {
 
@@ -25,6 +26,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   decel_tick_ = -1;
   decel_floor_ = ramp.base_level;
   holding_ = false;
+  then_.reset();
   if (distance && *distance <= 0) {
     phase_ = MotionPhase::Idle;
     marks_.end = start;
@@ -90,6 +92,7 @@ void StepGenerator::end_interval() {
       phase_ = MotionPhase::Running;
       marks_.run_start = t_;
       plan_decel();
+      reached_velocity();
       return;
     }
     ++level_;
@@ -102,6 +105,7 @@ void StepGenerator::end_interval() {
     level_ = decel_floor_;
     phase_ = MotionPhase::Running;
     marks_.decel_end = t_;
+    reached_velocity();
     return;
   }
   if (level_ <= ramp_.base_level + 1) {
@@ -127,6 +131,9 @@ bool StepGenerator::next(Step& out) {
   const int64_t d = ramp_.phase_per_step;
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
+    // The invariants every front end's input must keep (checked in the sanitizer build): a
+    // moving level (the next step's time divides by it) and a phase inside one step.
+    assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
     Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
     if (ramping && t_ + need > interval_end_) {
@@ -194,6 +201,7 @@ void StepGenerator::stop(Tick at) {
   if (phase_ == MotionPhase::Idle) return;
   advance_to(at);
   stopping_ = true;
+  then_.reset();
   if (phase_ == MotionPhase::Creeping) {
     phase_ = MotionPhase::Idle;  // already at base velocity: stop now
     marks_.end = t_;
@@ -213,9 +221,10 @@ void StepGenerator::halt(Tick at) {
 
 namespace stepnode::motion {
 
-void StepGenerator::change_velocity(Tick at, int64_t level) {
+void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);
+  then_ = std::move(then);
   // Never below one level: at level 0 the motion would stand still for ever and the next
   // step's time divides by the level (a 0 Hz minimum makes base_level 0).
   level = std::max({level, ramp_.base_level, int64_t{1}});
@@ -234,24 +243,39 @@ void StepGenerator::change_velocity(Tick at, int64_t level) {
     marks_.decel_start = t_;
     interval_index_ = 0;
     interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
-  } else if (phase_ != MotionPhase::Running) {
+  } else {
     phase_ = MotionPhase::Running;  // already there: hold it
+    reached_velocity();
   }
+}
+
+void StepGenerator::reached_velocity() {
+  if (!then_) return;
+  RampSpec ramp = *then_;
+  then_.reset();
+  adopt(ramp, ramp.run_level);
 }
 
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);
-  const __int128 d_old = ramp_.phase_per_step, d_new = ramp.phase_per_step;
-  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * d_new / d_old);
-  level_ = std::max<int64_t>(1, static_cast<int64_t>((static_cast<__int128>(level_) * d_new + d_old / 2) / d_old));
+  then_.reset();
+  const int64_t level =
+      (static_cast<__int128>(level_) * ramp.phase_per_step + ramp_.phase_per_step / 2) / ramp_.phase_per_step;
+  adopt(ramp, level);
+}
+
+void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
+  // The phase accumulator keeps its fraction of a step: acc/D is the same on both grids
+  // (rounded down, so 0 <= acc < D holds on the new one).
+  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * ramp.phase_per_step / ramp_.phase_per_step);
   ramp_ = ramp;
+  level_ = std::max<int64_t>(1, level);
   phase_ = MotionPhase::Running;
   holding_ = false;
   peak_level_ = level_;
   decel_floor_ = ramp_.base_level;
-  interval_index_ = 0;
-  interval_end_ = t_;
+  assert(acc_ >= 0 && acc_ < ramp_.phase_per_step);
 }
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {

@@ -35,7 +35,10 @@ class StepGenerator {
   // From time `at`, ramp to a new velocity level and hold it (continuous motion without a
   // destination: HP SUSTAIN, velocity modes). Up with the acceleration, down with the
   // deceleration of the ramp; never below the base level.
-  void change_velocity(Tick at, int64_t level);
+  // With `then`, the motion moves to that ramp's grid at its run level once `level` is
+  // reached (regrid): a rate the current grid cannot hold to 0.01 % is approached on the
+  // current grid, then held exactly on one made for it.
+  void change_velocity(Tick at, int64_t level, std::optional<RampSpec> then = std::nullopt);
   // From time `at`, carries a motion without a destination over to `ramp`'s level grid:
   // the velocity to the nearest level of the new grid (at least 1), the phase accumulator
   // keeps its fraction of a step, the motion runs on at that level. For velocity changes
@@ -67,6 +70,8 @@ class StepGenerator {
 
  private:
   void begin_decel();
+  void adopt(const RampSpec& ramp, int64_t level);
+  void reached_velocity();
   void advance_to(Tick at);
   void end_interval();
   Tick interval_length(Rational z, int64_t index) const;
@@ -85,9 +90,10 @@ class StepGenerator {
   Tick interval_end_ = 0;   // end of the current ramp interval
   int64_t interval_index_ = 0;
   bool stopping_ = false;   // stop(): no creep after the ramp
-  Tick decel_tick_ = -1;
+  Tick decel_tick_ = -1;     // while running to a target: the tick deceleration begins
   bool holding_ = false;     // change_velocity() down: run on at decel_floor_
-  int64_t decel_floor_ = 0;  // the level a deceleration ends at (base, or a lower velocity)    // while running to a target: the tick deceleration begins
+  int64_t decel_floor_ = 0;  // the level a deceleration ends at (base, or a lower velocity)
+  std::optional<RampSpec> then_;  // change_velocity(): the grid to move to once there
   int64_t steps_done_ = 0;
   Marks marks_;
 };

@@ -396,6 +396,26 @@ TEST_F(HpBus, StoredSettingsComeBackAfterResetNode) {
   EXPECT_EQ(mechanical(), 20);
 }
 
+TEST_F(HpBus, AStoredProfileTheChannelRefusesIsReportedAndTheObjectsShowThePowerOnOne) {
+  // The PROFILE subs are staged objects: a refused PROFILE (a FREQ minimum under the
+  // 2.5 µHz resolution, conflict row 6) still leaves them stored. At the next power-up it
+  // was dropped in silence while the objects kept showing it.
+  uint16_t p = index(0, kProfile);
+  EXPECT_EQ(profile(0, 1e-7, 800, 200, 25e-6), kIncompatible);
+  ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173), 0u);  // "save"
+  size_t from = sent.size();
+  nmt(0x81);  // reset node
+  advance_us(10'000);
+  std::vector<CanFrame> e;
+  for (const CanFrame& f : emcys(from))
+    if (emcy_code(f) == 0x5530) e.push_back(f);
+  ASSERT_EQ(e.size(), 1u);
+  EXPECT_EQ(e[0].data[3], static_cast<uint8_t>(p));
+  EXPECT_EQ(e[0].data[4], static_cast<uint8_t>(p >> 8));
+  EXPECT_EQ(get(p, od::hp_profile_sub::kMin), 0.0);  // power-on: 0 250 500 50E-6
+  EXPECT_EQ(get(p, od::hp_profile_sub::kMax), 250.0);
+}
+
 TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
   EXPECT_EQ(*sdo_read(0x1A03, 0), 3u);
   EXPECT_EQ(*sdo_read(0x1A03, 1), 0x20180008u);

@@ -181,6 +181,20 @@ TEST_F(StoredValues, AVersion1FileOfAnEarlierBuildStillLoads) {
   EXPECT_EQ(e[0].data[5], 0x01);
 }
 
+TEST_F(StoredValues, AVersion1FileWithCrLfLinesLoadsAndAStrangeHeaderIsNotOurs) {
+  write_file("# stepnode stored parameters v1\r\n1017:00 fa00\r\n");
+  make();
+  EXPECT_EQ(od().get<uint16_t>(0x1017, 0), 250);
+  EXPECT_TRUE(emcys_with(emcy_code::kDataStorage).empty());
+  // "v2garbage" or "v20" is not version 2, whatever follows.
+  ASSERT_EQ(sdo_write(0x1010, 1, kSave), 0u);
+  std::string text = file_text();
+  write_file("# stepnode stored parameters v20" + text.substr(text.find('\n')));
+  make();
+  EXPECT_EQ(od().get<uint16_t>(0x1017, 0), 1000);
+  EXPECT_TRUE(std::filesystem::exists(aside()));
+}
+
 TEST_F(StoredValues, AStaleTemporaryFileIsRemovedAtStart) {
   std::filesystem::path tmp = node->parameter_file().string() + ".tmp";
   std::ofstream(tmp) << "# stepnode stored parameters v2\n1017:00 f401\n10";

@@ -145,13 +145,15 @@ TEST_F(HpChannel, AppendixAPulseRateResolutionAndMaximumBoundTheRates) {
   EXPECT_EQ(done(), -1);
   EXPECT_NEAR(axis->velocity(), 800, 800 * 1e-6);
   // Down to a rate below one level of that grid (levels of slope / 76,800 = 2.6 mHz): it
-  // holds one level, never level 0 (its step time divided by the level).
+  // ramps to the lowest level, then holds 1e-5 Hz exactly on a grid made for it (level 0
+  // would have divided the next step's time by zero).
   EXPECT_EQ(ch->sustain(1e-5, true, now), Error::None);
   wait(4100);
   int64_t held = position();
   wait(2000);
-  EXPECT_LE(position() - held, 1);  // at most one level (2.6 mHz): a step in 380 s
+  EXPECT_LE(position() - held, 1);
   EXPECT_TRUE(axis->busy());
+  EXPECT_NEAR(axis->velocity(), 1e-5, 1e-5 * 1e-4);
   ch->halt_sgl(now);
   // With a minimum the clamp lifts a tiny rate to it, as the manual says (3-12).
   ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
@@ -159,6 +161,62 @@ TEST_F(HpChannel, AppendixAPulseRateResolutionAndMaximumBoundTheRates) {
   EXPECT_EQ(ch->sustain(1e-12, true, now), Error::None);
   wait(1000);
   EXPECT_NEAR(position() - before, 100, 1);
+}
+
+TEST_F(HpChannel, ASustainChangeOnACoarseRampHoldsTheRateItself) {
+  // At 1 MHz/s a ramp level is 13.3 Hz. SUSTAIN 10000 then SUSTAIN 5 held one level
+  // (13.3 Hz) and SUSTAIN 20 two (26.7 Hz); appendix A: pulse rate accuracy 0.01 %.
+  ASSERT_EQ(ch->profile(freq(0, 10'000, 1e6, 1e-6), now), Conflict::None);
+  ASSERT_EQ(ch->sustain(10'000, true, now), Error::None);
+  wait(100);
+  ASSERT_EQ(ch->sustain(5, true, now), Error::None);
+  wait(1000);
+  int64_t p0 = position();
+  wait(10'000);
+  EXPECT_NEAR(position() - p0, 50, 1);
+  EXPECT_NEAR(axis->velocity(), 5, 5e-4);
+  ASSERT_EQ(ch->sustain(20, true, now), Error::None);
+  wait(1000);
+  p0 = position();
+  wait(10'000);
+  EXPECT_NEAR(position() - p0, 200, 1);
+}
+
+TEST_F(HpChannel, AMoveAtMinEqualToMaxRunsAtThatRateNotFaster) {
+  // PROFILE FREQ 10 10 500: min = max, "no frequencies below the minimum" and none above
+  // the maximum (3-12). The creep level (one step from standstill at 500 Hz/s = 31.6 Hz)
+  // ran the whole move at 31.6 Hz: 100 steps in 3.2 s instead of 10 s.
+  ASSERT_EQ(ch->profile(freq(10, 10, 500, 25e-6), now), Conflict::None);
+  ASSERT_EQ(ch->move(100, false, true, now), Error::None);
+  wait(9'800);
+  EXPECT_LT(position(), 100);
+  EXPECT_EQ(done(), -2);
+  wait(400);
+  EXPECT_EQ(position(), 100);
+  EXPECT_EQ(done(), 0);
+}
+
+TEST_F(HpChannel, AMoveLongerThanTheEnginesClockIsRefused) {
+  // 2^31 - 1 pulses at a 2.5 µHz maximum is 27 million years: its deceleration tick
+  // overflowed int64. Refused (a range abort on the bus), nothing armed.
+  ASSERT_EQ(ch->profile(freq(0, 2.5e-6, 1, 25e-6), now), Conflict::None);
+  EXPECT_EQ(ch->move(2147483647, false, true, now), Error::ValueOutOfRange);
+  EXPECT_EQ(done(), 0);
+  EXPECT_EQ(ch->move(10, false, true, now), Error::None);  // 46 days: fine
+  ch->halt_sgl(now);
+}
+
+TEST_F(HpChannel, AnArmedSustainIsCheckedAgainWhenItFires) {
+  // SUSTAIN 100 NOWAIT under TRIG HOLD, then PROFILE with a 0 maximum, then TRIG SGL: the
+  // clamp leaves 0 Hz, which never reaches the engine.
+  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
+  ASSERT_EQ(ch->sustain(100, true, now), Error::None);
+  EXPECT_EQ(done(), -3);
+  ASSERT_EQ(ch->profile(freq(0, 0, 500, 25e-6), now), Conflict::None);
+  ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
+  wait(1000);
+  EXPECT_EQ(position(), 0);
+  EXPECT_FALSE(axis->busy());
 }
 
 TEST_F(HpChannel, ProfileWidthSettingConflictsAreTheTablesRows) {
