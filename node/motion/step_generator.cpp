@@ -128,9 +128,10 @@ void StepGenerator::end_interval() {
 }
 
 bool StepGenerator::next(Step& out) {
-  const int64_t d = ramp_.phase_per_step;
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
+    // Read each turn: reaching a velocity may move the motion to another grid (adopt).
+    const int64_t d = ramp_.phase_per_step;
     // The invariants every front end's input must keep (checked in the sanitizer build): a
     // moving level (the next step's time divides by it) and a phase inside one step.
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
@@ -180,8 +181,8 @@ std::optional<Tick> StepGenerator::peek() {
 void StepGenerator::advance_to(Tick at) {
   // Moves time forward to `at` without taking a step (the caller has taken every step
   // due before `at`); ramp intervals that end on the way are processed.
-  const int64_t d = ramp_.phase_per_step;
   while (phase_ != MotionPhase::Idle && t_ < at) {
+    const int64_t d = ramp_.phase_per_step;  // each turn: see next()
     Tick need = (d - acc_ + level_ - 1) / level_;
     Tick limit = std::min(at, t_ + need - 1);
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
