@@ -157,7 +157,6 @@ std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
                                                   const std::vector<std::pair<std::string, std::string>>& defaults) {
   // The built-in records of the mappings the file touches, to go back to.
   std::map<uint16_t, std::map<uint8_t, od::Bytes>> built_in;
-  auto is_mapping = [](unsigned i) { return (i >= 0x1600 && i <= 0x17FF) || (i >= 0x1A00 && i <= 0x1BFF); };
   for (const auto& [key, text] : defaults) {
     unsigned index = 0, sub = 0;
     char extra = 0;
@@ -175,9 +174,9 @@ std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
     }
     if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
       throw UsageError("defaults: " + key + " = " + text + ": " + std::string(od::abort_text(a)));
-    if (is_mapping(index) && !built_in.count(static_cast<uint16_t>(index)))
-      for (const auto& [sub_index, entry] : od.object(static_cast<uint16_t>(index))->entries)
-        built_in[static_cast<uint16_t>(index)][sub_index] = entry.default_value;
+    const auto at = static_cast<uint16_t>(index);
+    if ((od::is_rpdo_mapping(at) || od::is_tpdo_mapping(at)) && !built_in.count(at))
+      for (const auto& [sub_index, entry] : od.object(at)->entries) built_in[at][sub_index] = entry.default_value;
     e->default_value = value;
     e->value = value;
   }

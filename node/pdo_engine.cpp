@@ -1,7 +1,5 @@
 #include "node/pdo_engine.hpp"
 
-#include <spdlog/spdlog.h>
-
 #include <algorithm>
 
 namespace stepnode::node {
@@ -11,12 +9,6 @@ constexpr uint32_t kInvalid = 0x80000000u;
 
 od::PdoMapping read_mapping(od::Dictionary& od, uint16_t index) {
   od::PdoMapping mapping;
-  // A record the mapping procedure would refuse (it can only come from a loaded value;
-  // the node repairs those at start) maps nothing: the PDO stays silent, never throws.
-  if (od::SdoAbort a = od::check_mapping_record(od, index); a != od::SdoAbort::None) {
-    spdlog::warn("PDO mapping {:04X} is not valid ({}): the PDO is not used", index, od::abort_text(a));
-    return mapping;
-  }
   uint8_t n = od.get<uint8_t>(index, 0);
   for (uint8_t i = 1; i <= n && i <= od::kMaxMappedEntries; ++i)
     mapping.push_back(od::MappedEntry::from_word(od.get<uint32_t>(index, i)));

@@ -32,8 +32,8 @@ SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> w
 }
 
 SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index) {
-  const bool receive = index >= 0x1600 && index <= 0x17FF;
-  if (!receive && !(index >= 0x1A00 && index <= 0x1BFF)) return SdoAbort::NoObject;
+  const bool receive = is_rpdo_mapping(index);
+  if (!receive && !is_tpdo_mapping(index)) return SdoAbort::NoObject;
   const Entry* count = dictionary.find(index, 0);
   if (!count) return SdoAbort::NoObject;
   const uint8_t n = static_cast<uint8_t>(as_unsigned(count->type, count->value));

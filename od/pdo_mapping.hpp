@@ -38,6 +38,8 @@ SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> w
 // 0x1600..0x17FF, TPDO mappings 0x1A00..0x1BFF (sub 0 the number of entries, at most 8).
 // Stored or configured records are loaded without the mapping procedure; this is its rule.
 SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index);
+inline bool is_rpdo_mapping(uint16_t index) { return index >= 0x1600 && index <= 0x17FF; }
+inline bool is_tpdo_mapping(uint16_t index) { return index >= 0x1A00 && index <= 0x1BFF; }
 
 size_t mapping_bits(const PdoMapping& mapping);
 inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(mapping) + 7) / 8; }

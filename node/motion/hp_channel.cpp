@@ -151,16 +151,19 @@ Error Channel::sustain(double value, bool nowait, Tick now) {
   if (value != 0)
     if (Error e = check_can_move(true); e != Error::None) return accept(e);
   double rate = profile_.mode == ProfileMode::Freq ? position_.to_steps(value) : value;
-  // Appendix A: a rate resolved to 2.5 µHz. What the profile's clamp leaves of a rate
-  // finer than that (a 0 minimum lets 1E-12 through) is refused, not handed to the engine.
-  if (!std::isfinite(rate) ||
-      (profile_.mode == ProfileMode::Freq && rate != 0 && clamp_to_profile(profile_, std::fabs(rate)) < kRateResolutionHz))
-    return Error::ValueOutOfRange;
+  if (!std::isfinite(rate) || below_rate_resolution(rate)) return Error::ValueOutOfRange;
   // "A running SUSTAIN command must be stopped with HALT or SUSTAIN 0 before a command to
   // reverse direction can be executed" (error 91).
   if (run_ == Run::Sustain && rate != 0 && (rate > 0 ? +1 : -1) != direction_)
     return accept(Error::MustStopToChangeDirection);
   return arm(Pending{Action::Sustain, 0, rate}, nowait, now);
+}
+
+bool Channel::below_rate_resolution(double rate) const {
+  // Appendix A: a rate resolved to 2.5 µHz. What the profile's clamp leaves of a rate
+  // finer than that (a 0 minimum lets 1E-12 through) never reaches the engine.
+  return profile_.mode == ProfileMode::Freq && rate != 0 &&
+         clamp_to_profile(profile_, std::fabs(rate)) < kRateResolutionHz;
 }
 
 Error Channel::arm(const Pending& p, bool nowait, Tick now) {
@@ -268,7 +271,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
   double target = clamp_to_profile(profile_, std::fabs(rate));
   // Checked when given, and again now: a PROFILE given while it waited for its trigger
   // may have moved the clamp below the rate resolution (a 0 maximum).
-  if (!width && target < kRateResolutionHz) return;
+  if (below_rate_resolution(rate)) return;
   sustain_reached_ = false;
   if (run_ == Run::Sustain) {
     if (dir != direction_) return (void)accept(Error::MustStopToChangeDirection);

@@ -112,6 +112,7 @@ class Channel {
   void start_move_steps(int64_t steps, Tick at);
   void start_sustain_rate(double rate, Tick at);
   void change_sustain_velocity(double target, Tick at);
+  bool below_rate_resolution(double rate) const;
   double current_width_at(Tick t) const;
   void end(Done how, uint8_t event, Tick at);
   void interrupt(uint8_t event, Tick at);
