@@ -15,6 +15,7 @@ int64_t floor_mod(int64_t a, int64_t b) { return a - floor_div(a, b) * b; }
 void AxisMachine::step(motion::Tick time, int direction) {
   ++pulses_;
   last_step_time_ = time;
+  if (trace_) trace_->push_back({time, direction >= 0 ? +1 : -1});
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   int64_t next = position_ + (direction >= 0 ? 1 : -1);

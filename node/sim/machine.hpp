@@ -34,6 +34,13 @@ struct AxisMachineConfig {
   uint32_t miss_every = 0;               // every n-th step is lost (0 = none)
 };
 
+// One step pulse as the drive received it: its tick and direction (+1 / -1).
+struct TracedStep {
+  motion::Tick time;
+  int direction;
+  bool operator==(const TracedStep&) const = default;
+};
+
 class AxisMachine : public motion::MotorPort {
  public:
   explicit AxisMachine(AxisMachineConfig config = {}) : config_(config) {}
@@ -60,6 +67,9 @@ class AxisMachine : public motion::MotorPort {
   int64_t encoder_count() const override;
   int64_t encoder_counts_per_rev() const;
   uint64_t pulses_received() const { return pulses_; }
+  // Appends every step pulse received from now on to `trace` (nullptr: stop). The golden
+  // step-train test records the engine's output through this.
+  void trace_into(std::vector<TracedStep>* trace) { trace_ = trace; }
   motion::Tick last_step_time() const { return last_step_time_; }
 
   AxisMachineConfig& config() { return config_; }
@@ -71,6 +81,7 @@ class AxisMachine : public motion::MotorPort {
   uint64_t pulses_ = 0;
   motion::Tick last_step_time_ = 0;
   bool powered_ = true;
+  std::vector<TracedStep>* trace_ = nullptr;
 };
 
 // The whole machine: the axes and the inputs they share.

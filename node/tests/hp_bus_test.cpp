@@ -12,7 +12,6 @@
 #include "node/motion_service.hpp"
 #include "node/tests/node_harness.hpp"
 #include "od/hp_objects.hpp"
-#include "od/sdo_client.hpp"
 
 namespace stepnode::node::test {
 namespace {
@@ -38,36 +37,6 @@ class HpBus : public NodeHarness {
     nmt(0x01);  // operational: TPDOs go out
   }
 
-  // One SDO transfer through the od client (REAL64 values need segmented transfers).
-  od::SdoResult transfer(bool download, uint16_t index, uint8_t sub, od::Bytes data = {}) {
-    od::SdoClient client(kSdoRx, kSdoTx);
-    std::vector<CanFrame> out;
-    if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
-    else client.start_upload(index, sub, od::SdoClient::Mode::Auto, t, out);
-    for (int guard = 0; guard < 64 && !client.done(); ++guard) {
-      std::vector<CanFrame> requests;
-      requests.swap(out);
-      for (const CanFrame& f : requests) {
-        size_t before = sent.size();
-        frame(f);
-        for (size_t i = before; i < sent.size(); ++i) client.on_frame(sent[i], t, out);
-      }
-    }
-    EXPECT_TRUE(client.done());
-    return client.result();
-  }
-  uint32_t put(uint16_t index, uint8_t sub, double v) {
-    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<double>(v)).abort);
-  }
-  template <class T>
-  uint32_t put_int(uint16_t index, uint8_t sub, T v) {
-    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<T>(v)).abort);
-  }
-  double get(uint16_t index, uint8_t sub = 0) {
-    od::SdoResult r = transfer(false, index, sub);
-    EXPECT_TRUE(r.ok());
-    return od::decode<double>(r.data);
-  }
   int done(unsigned a = 0) { return static_cast<int8_t>(*sdo_read(index(a, kDone), 0)); }
   int error(unsigned a = 0) { return static_cast<int>(*sdo_read(index(a, kError), 0)); }
   int32_t mechanical(unsigned a = 0) {

@@ -15,6 +15,8 @@
 #include <vector>
 
 #include "node/canopen_node.hpp"
+#include "od/sdo_client.hpp"
+#include "od/value_codec.hpp"
 
 namespace stepnode::node::test {
 
@@ -103,6 +105,39 @@ class NodeHarness : public ::testing::Test {
     if (abort) *abort = code;
     if (code != 0) return std::nullopt;
     return value;
+  }
+
+  // One SDO transfer of any size through the od client (expedited, or segmented for the
+  // REAL64 and longer values), the node answering each request at once.
+  od::SdoResult transfer(bool download, uint16_t index, uint8_t sub, od::Bytes data = {}) {
+    od::SdoClient client(kSdoRx, kSdoTx);
+    std::vector<CanFrame> out;
+    if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
+    else client.start_upload(index, sub, od::SdoClient::Mode::Auto, t, out);
+    for (int guard = 0; guard < 64 && !client.done(); ++guard) {
+      std::vector<CanFrame> requests;
+      requests.swap(out);
+      for (const CanFrame& f : requests) {
+        size_t before = sent.size();
+        frame(f);
+        for (size_t i = before; i < sent.size(); ++i) client.on_frame(sent[i], t, out);
+      }
+    }
+    EXPECT_TRUE(client.done());
+    return client.result();
+  }
+  // A REAL64 download (the HP objects' values); the abort code, 0 for success.
+  uint32_t put(uint16_t index, uint8_t sub, double v) {
+    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<double>(v)).abort);
+  }
+  template <class T>
+  uint32_t put_int(uint16_t index, uint8_t sub, T v) {
+    return static_cast<uint32_t>(transfer(true, index, sub, od::encode<T>(v)).abort);
+  }
+  double get(uint16_t index, uint8_t sub = 0) {
+    od::SdoResult r = transfer(false, index, sub);
+    EXPECT_TRUE(r.ok());
+    return od::decode<double>(r.data);
   }
 
   // The CiA 301 dynamic mapping procedure (7.5.2.36), over SDO: make the PDO invalid,
