@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "node/error_behaviour.hpp"
 #include "od/eds.hpp"
 #include "od/pdo_mapping.hpp"
 
@@ -30,7 +31,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                           spdlog::warn("heartbeat of node {} lost", node);
                           emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication,
                                       {node}, now);
-                          if (on_heartbeat_lost) on_heartbeat_lost(node, now);
+                          communication_error(CommunicationError::HeartbeatLost, node, now);
                         },
                     .recovered =
                         [this](uint8_t node, uint64_t now) {
@@ -42,7 +43,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           dictionary_, [this](const od::CanFrame& f) { send(f); },
           [this](uint8_t counter, uint64_t now) {
             pdo_.on_sync(counter, now);
-            if (on_sync) on_sync(now);
+            if (app_) app_->sync(now);
           },
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
@@ -133,7 +134,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   if (reset_application) {
     load_parameters(0x1000, 0x9FFF, now_us);
     for (const auto& e : power_up_errors_) emcy_.report(e.code, error_bits::kGeneric, e.manufacturer, now_us);
-    if (on_reset_application) on_reset_application(now_us);
+    if (app_) app_->reset_application(now_us);
   } else {
     load_parameters(0x1000, 0x1FFF, now_us);
   }
@@ -160,7 +161,7 @@ void CanopenNode::enter(NmtState next, uint64_t now_us) {
     spdlog::info("NMT: {} -> {}", state_name(previous), state_name(next));
     // Confirm the new state at once; the period restarts from here.
     heartbeat_.send_now(next, now_us);
-    if (on_state_change) on_state_change(next, now_us);
+    if (app_) app_->state_changed(next, now_us);
   }
   emcy_.on_tick(now_us);
 }
@@ -174,8 +175,17 @@ void CanopenNode::handle_nmt(NmtCommand command, uint64_t now_us) {
   }
 }
 
+void CanopenNode::communication_error(CommunicationError error, uint8_t node, uint64_t now_us) {
+  if (app_) app_->communication_error(error, node, now_us);
+  const uint8_t behaviour = dictionary_.get<uint8_t>(od::kErrorBehaviour, od::kCommunicationErrorSub);
+  if (auto next = state_after_communication_error(behaviour, state_)) {
+    spdlog::warn("communication error: 0x1029 sub 1 = {} takes the node to {}", behaviour, state_name(*next));
+    enter(*next, now_us);
+  }
+}
+
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
-  if (on_advance) on_advance(now_us);
+  if (app_) app_->advance(now_us);
   if (auto command = decode_nmt(frame, node_id())) {
     handle_nmt(*command, now_us);
     return;
@@ -196,7 +206,7 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
 }
 
 void CanopenNode::on_tick(uint64_t now_us) {
-  if (on_advance) on_advance(now_us);
+  if (app_) app_->advance(now_us);
   consumer_.on_tick(now_us);
   if (state_ == NmtState::Initialising) return;
   heartbeat_.on_tick(state_, now_us);
@@ -237,9 +247,13 @@ void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
     case BusEvent::TxOverflow:
       emcy_.report(emcy_code::kCanOverrun, error_bits::kCommunication, {}, now_us);
       break;
-    case BusEvent::ErrorWarning:
     case BusEvent::BusOff:
-      break;  // logged by the transport; nothing can be sent while bus-off
+      // Nothing can be sent while bus-off (the EMCY waits for the restart); the masters
+      // cannot reach the node either: a communication error (CiA 301 0x1029).
+      communication_error(CommunicationError::BusOff, 0, now_us);
+      break;
+    case BusEvent::ErrorWarning:
+      break;  // logged by the transport
   }
 }
 

@@ -1,12 +1,13 @@
 // One CANopen slave (CiA 301): the dictionary and every communication service, driven by
 // frames and time passed in. No sockets and no clocks here, so tests run in virtual time;
-// node_process.cpp connects it to SocketCAN and CLOCK_MONOTONIC.
+// node/device.* puts the profiles behind it and node/main.cpp connects it to SocketCAN and CLOCK_MONOTONIC.
 #pragma once
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
 
+#include "node/application.hpp"
 #include "node/emcy.hpp"
 #include "node/heartbeat.hpp"
 #include "node/nmt.hpp"
@@ -54,16 +55,9 @@ class CanopenNode {
   EmcyProducer& emcy() { return emcy_; }
   const std::filesystem::path& parameter_file() const { return store_.file(); }
 
-  // Application hooks (the axes use them): a monitored heartbeat was lost / came back;
-  // NMT state changed; reset node reloaded the application parameters.
-  std::function<void(uint8_t node, uint64_t now_us)> on_heartbeat_lost;
-  std::function<void(NmtState state, uint64_t now_us)> on_state_change;
-  std::function<void(uint64_t now_us)> on_reset_application;
-  // Brings the application up to `now_us`; called before every frame and tick, so a
-  // command in a frame acts on an application that is current to the microsecond.
-  std::function<void(uint64_t now_us)> on_advance;
-  // Every SYNC received (or produced here), after the synchronous PDOs (HP TRIG SYS).
-  std::function<void(uint64_t now_us)> on_sync;
+  // The profiles behind the dictionary (node/device.* sets it); nullptr: none, a bare
+  // CiA 301 slave. Not owned; it outlives the node or is reset first.
+  void set_application(Application* application) { app_ = application; }
 
  private:
   void install_service_hooks();
@@ -71,10 +65,13 @@ class CanopenNode {
   void load_parameters(uint16_t first, uint16_t last, uint64_t now_us);
   void enter(NmtState state, uint64_t now_us);
   void handle_nmt(NmtCommand command, uint64_t now_us);
+  // The application is told first, then 0x1029 says what happens to the NMT state.
+  void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);
   void send(const od::CanFrame& frame) { send_(frame); }
 
   NodeOptions options_;
   Send send_;
+  Application* app_ = nullptr;
   od::Dictionary dictionary_;
   ParameterStore store_;
   EmcyProducer emcy_;

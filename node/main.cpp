@@ -7,10 +7,8 @@
 #include <ctime>
 #include <iostream>
 
-#include "node/canopen_node.hpp"
 #include "node/config.hpp"
-#include "node/hp_service.hpp"
-#include "node/motion_service.hpp"
+#include "node/device.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/socketcan.hpp"
 #include "od/eds.hpp"
@@ -49,26 +47,7 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
 
 int run(const node::NodeConfig& cfg) {
   canio::SocketCan can(cfg.iface);
-  node::CanopenNode canopen(cfg.options, [&can](const od::CanFrame& f) { can.send(f); });
-  for (const auto& r : node::apply_object_defaults(canopen.dictionary(), cfg.object_defaults)) {
-    spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
-                 r.index, od::abort_text(r.reason));
-    // EMCY 0x6100 after boot-up, manufacturer bytes: the record's index, little-endian.
-    canopen.report_at_power_up(node::emcy_code::kSoftware,
-                               {static_cast<uint8_t>(r.index), static_cast<uint8_t>(r.index >> 8), 0, 0, 0});
-  }
-  node::MotionService motion(canopen.dictionary(), cfg.options.device, canopen.emcy());
-  // The HP 44714A channels drive the same axes; their service advances both.
-  node::HpService hp(canopen.dictionary(), cfg.options.device, motion, canopen.emcy());
-  canopen.on_advance = [&hp](uint64_t now) { hp.advance(now); };
-  canopen.on_reset_application = [&hp](uint64_t now) { hp.power_up(now); };
-  // TRIG SYS starts at the SYNC frame's arrival (the kernel's receive timestamp), not when
-  // this process got round to reading it: every node on the bus then starts together.
-  uint64_t frame_arrival_us = 0;
-  canopen.on_sync = [&hp, &frame_arrival_us](uint64_t now) {
-    hp.on_sync(now, frame_arrival_us && frame_arrival_us <= now ? frame_arrival_us : now);
-  };
-  canopen.on_heartbeat_lost = [&motion](uint8_t, uint64_t now) { motion.master_lost(now); };
+  node::Device device(cfg.options, cfg.object_defaults, [&can](const od::CanFrame& f) { can.send(f); });
 
   canio::EventLoop loop;
   loop.stop_on_signals();
@@ -78,22 +57,20 @@ int run(const node::NodeConfig& cfg) {
       if (r->error_frame) {
         spdlog::warn("{}: CAN error frame, class 0x{:08x} controller 0x{:02x}", cfg.iface,
                      r->error_class, r->controller_status);
-        for (auto e : bus_events(*r)) canopen.on_bus_event(e, now);
+        for (auto e : bus_events(*r)) device.on_bus_event(e, now);
         continue;
       }
-      frame_arrival_us = arrival_us(*r, now);
-      canopen.on_frame(r->frame, now);
-      frame_arrival_us = 0;
+      device.on_frame(r->frame, now, arrival_us(*r, now));
     }
-    canopen.on_receive_overruns(can.receive_overruns(), canio::EventLoop::now_us());
+    device.on_receive_overruns(can.receive_overruns(), canio::EventLoop::now_us());
   });
   loop.every(cfg.tick_us, [&] {
-    canopen.on_tick(canio::EventLoop::now_us());
+    device.on_tick(canio::EventLoop::now_us());
     can.flush();
   });
   spdlog::info("node {} on {}, {} axes, parameters in {}", cfg.options.device.node_id, cfg.iface,
-               cfg.options.device.axes, canopen.parameter_file().string());
-  canopen.start(canio::EventLoop::now_us());
+               cfg.options.device.axes, device.canopen().parameter_file().string());
+  device.start(canio::EventLoop::now_us());
   loop.run();
   spdlog::info("stopping");
   can.flush();
@@ -111,10 +88,11 @@ int main(int argc, char** argv) {
     if (exit_now) return exit_code;
     spdlog::set_level(spdlog::level::from_str(cfg.log_level));
     if (cfg.print_eds) {
-      od::Dictionary dictionary;
-      od::build_device_dictionary(dictionary, cfg.options.device);
-      (void)node::apply_object_defaults(dictionary, cfg.object_defaults);  // refused: built-in kept
-      std::cout << od::write_eds(dictionary, cfg.options.device);
+      // The EDS of the device as configured (a refused mapping: its built-in record). The
+      // log would land in the EDS on stdout.
+      spdlog::set_level(spdlog::level::off);
+      node::Device device(cfg.options, cfg.object_defaults, [](const od::CanFrame&) {});
+      std::cout << od::write_eds(device.dictionary(), cfg.options.device);
       return 0;
     }
     return run(cfg);

@@ -119,6 +119,16 @@ void add_heartbeat(Dictionary& od) {
   od.var(0x1017, "Producer heartbeat time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(1000));
 }
 
+void add_error_behaviour(Dictionary& od) {
+  // CiA 301 7.5.2.32: what a communication error (heartbeat consumer timeout, bus-off) does
+  // to the NMT state: 0 pre-operational (if operational), 1 no change, 2 stopped. 3..0x7F
+  // are reserved and 0x80..0xFF manufacturer-specific, of which this device defines none.
+  Object& behaviour = od.record(kErrorBehaviour, "Error behaviour", ObjectCode::Array);
+  limits<uint8_t>(behaviour.add(kCommunicationErrorSub, "Communication error", DT::Unsigned8, AC::ReadWrite,
+                                {kErrorBehaviourPreOperational}),
+                  kErrorBehaviourPreOperational, kErrorBehaviourStopped);
+}
+
 void add_store_restore(Dictionary& od) {
   Object& store = od.record(0x1010, "Store parameters", ObjectCode::Array);
   Object& restore = od.record(0x1011, "Restore default parameters", ObjectCode::Array);
@@ -228,6 +238,12 @@ void add_diagnostic_objects(Dictionary& od) {
   // kernel's SO_RXQ_OVFL count); each increase also goes out as EMCY 0x8110.
   od.var(kReceiveOverruns, "CAN frames dropped at the socket", DT::Unsigned32, AC::ReadOnly,
          encode<uint32_t>(0), true);
+  // Whose heartbeat loss is the master's: 0 any node in 0x1016, 1..127 only that node.
+  // A lost master ramps every moving axis down and latches %I8; another node's loss is
+  // an EMCY 0x8130 only.
+  limits<uint8_t>(od.var(kMasterNodeId, "Master node-ID (0 = any monitored node)", DT::Unsigned8,
+                         AC::ReadWrite, {0}),
+                  0, 127);
 }
 
 }  // namespace
@@ -244,6 +260,7 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
   add_error_history(od);
   add_sync_and_emcy(od, info);
   add_heartbeat(od);
+  add_error_behaviour(od);
   add_store_restore(od);
   add_sdo_server_parameters(od, info.node_id);
   for (unsigned n = 0; n < pdo_count(info); ++n) {

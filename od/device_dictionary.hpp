@@ -30,6 +30,12 @@ constexpr unsigned kErrorHistoryLength = 8;
 constexpr size_t kUserDataMaxLength = 4096;
 // 0x2F10: received frames the CAN socket dropped (receive queue overflow), U32 ro.
 constexpr uint16_t kReceiveOverruns = 0x2F10;
+// 0x2F11: the node-ID of the master whose heartbeat loss stops the axes (0: any), U8 rw.
+constexpr uint16_t kMasterNodeId = 0x2F11;
+// 0x1029 error behaviour (CiA 301 7.5.2.32), sub 1: the communication error class.
+constexpr uint16_t kErrorBehaviour = 0x1029;
+constexpr uint8_t kCommunicationErrorSub = 1;
+constexpr uint8_t kErrorBehaviourPreOperational = 0, kErrorBehaviourNoChange = 1, kErrorBehaviourStopped = 2;
 
 inline unsigned pdo_count(const DeviceInfo& info) { return kPdosPerAxis * info.axes; }
 // Simulated motors (0x5000 blocks): one per axis, or 3 behind a multiplexed axis.

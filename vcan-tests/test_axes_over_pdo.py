@@ -233,6 +233,7 @@ def test_stall_injected(axis, master):
 
 def test_heartbeat_loss_stops_the_axis(axis, master):
     master.write_u32(NODE, 0x1016, 1, (0x7F << 16) | 300)
+    master.write_u8(NODE, 0x1029, 1, 1)    # stay operational: TPDO1 shows the ramp down
     master.send(0x77F, b"\x05")
     axis.command("rel", 200000)
     deadline = time.monotonic() + 1.0

@@ -136,8 +136,10 @@ def test_axis_heartbeat_loss_decelerates_and_latches_watchdog(link, ax, master):
     ax.set_profile(SLOW)  # running 1000 steps/s, deceleration (AQ7) 300 ms
     hb = HeartbeatSender(0x7F, 0.1).start()
     try:
-        # 0x1016:1 = node 0x7F, 300 ms: the node watches the test's heartbeat.
+        # 0x1016:1 = node 0x7F, 300 ms: the node watches the test's heartbeat. 0x1029:1 = 1:
+        # the error leaves the node operational, so its TPDOs show the ramp down.
         master.write_u32(NODE, 0x1016, 1, (0x7F << 16) | 300)
+        master.write_u8(NODE, 0x1029, 1, 1)
         time.sleep(0.5)
         set_position(ax, 0)
         mark, emark = ax.mark(), link.emcy_mark()
@@ -170,5 +172,31 @@ def test_axis_heartbeat_loss_decelerates_and_latches_watchdog(link, ax, master):
         assert clear(ax).status == VALID
         stopped = frames[-1].position
         assert ax.move("rel", 300)[-1].position == stopped + 300
+    finally:
+        hb.close()
+
+
+def test_axis_heartbeat_loss_with_the_standard_error_behaviour(link, ax, master):
+    """0x1029:1 = 0 (CiA 301's default): a heartbeat consumer timeout takes an operational
+    node to pre-operational, announced by a heartbeat 0x7F at once, and the axis still ramps
+    down and latches %I8 (read over SDO: pre-operational sends no TPDOs)."""
+    assert master.read_u8(NODE, 0x1029, 1) == 0
+    ax.set_profile(SLOW)
+    hb = HeartbeatSender(0x7F, 0.1).start()
+    try:
+        master.write_u32(NODE, 0x1016, 1, (0x7F << 16) | 300)
+        time.sleep(0.5)
+        set_position(ax, 0)
+        mark = ax.mark()
+        ax.command("rel", 200000)
+        ax.wait_status(lambda s: s == MOVING | VALID, 5.0, mark, "running")
+        hb.stop()
+        assert master.wait_heartbeat(NODE, timeout=2.0, state=0x7F) == 0x7F, "not pre-operational"
+        deadline = time.monotonic() + 5.0
+        status = master.read_u16(NODE, 0x2001)
+        while status & MOVING and time.monotonic() < deadline:
+            time.sleep(0.05)
+            status = master.read_u16(NODE, 0x2001)
+        assert not status & MOVING and status & WATCHDOG, status_text(status)
     finally:
         hb.close()

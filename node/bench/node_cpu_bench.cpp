@@ -1,5 +1,5 @@
 // The node's CPU share while three axes each run at 245,730 steps/s in real time: the real
-// CanopenNode + MotionService + HpService wired as node/main.cpp wires them, ticked every
+// device (node/device.*, as node/main.cpp builds it), ticked every
 // 1 ms on CLOCK_MONOTONIC exactly as the process does (no CAN socket: frames go to a
 // counter). Prints the figures; asserts nothing.
 //   build/node/node_cpu_bench [--seconds 10] [--tick-us 1000]
@@ -11,9 +11,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "node/canopen_node.hpp"
-#include "node/hp_service.hpp"
-#include "node/motion_service.hpp"
+#include "node/device.hpp"
 #include "od/axis_objects.hpp"
 
 using namespace stepnode;
@@ -53,16 +51,12 @@ int main(int argc, char** argv) {
   options.device.axes = 3;
   options.state_dir = std::filesystem::temp_directory_path() / "stepnode-bench";
   uint64_t frames = 0;
-  node::CanopenNode canopen(options, [&frames](const od::CanFrame&) { ++frames; });
-  node::MotionService motion(canopen.dictionary(), options.device, canopen.emcy());
-  node::HpService hp(canopen.dictionary(), options.device, motion, canopen.emcy());
-  canopen.on_advance = [&hp](uint64_t t) { hp.advance(t); };
-  canopen.on_reset_application = [&hp](uint64_t t) { hp.power_up(t); };
+  node::Device device(options, {}, [&frames](const od::CanFrame&) { ++frames; });
   uint64_t t0 = now_us();
-  canopen.start(t0);
-  canopen.on_frame(od::CanFrame(0, {0x01, 0}), t0);  // NMT start: TPDOs flow as on a bus
+  device.start(t0);
+  device.on_frame(od::CanFrame(0, {0x01, 0}), t0);  // NMT start: TPDOs flow as on a bus
 
-  od::Dictionary& od = canopen.dictionary();
+  od::Dictionary& od = device.dictionary();
   using namespace od::axis_obj;
   for (unsigned a = 0; a < 3; ++a) {
     uint16_t p = index(a, kProfile);
@@ -89,14 +83,14 @@ int main(int argc, char** argv) {
       ++next.tv_sec;
     }
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
-    canopen.on_tick(now_us());
+    device.on_tick(now_us());
     ++ticks;
   }
   double wall = static_cast<double>(now_us() - start) / 1e6;
   double cpu = cpu_seconds() - cpu0;
   int64_t steps = 0;
-  for (unsigned a = 0; a < 3; ++a) steps += motion.axis(a).motor_position();
-  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", motion.axis(0).velocity());
+  for (unsigned a = 0; a < 3; ++a) steps += device.motion().axis(a).motor_position();
+  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", device.motion().axis(0).velocity());
   std::printf("wall time            %.2f s, %llu ticks of %llu us\n", wall,
               static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(tick_us));
   std::printf("steps generated      %lld (%.0f steps/s in total)\n", static_cast<long long>(steps),

@@ -9,6 +9,7 @@
 
 #include "node/canopen_node.hpp"
 #include "node/config.hpp"
+#include "node/tests/recording_application.hpp"
 
 namespace stepnode::node {
 namespace {
@@ -141,15 +142,16 @@ TEST_F(NodeTest, HeartbeatProducerPeriodAndChange) {
 }
 
 TEST_F(NodeTest, HeartbeatConsumerTimeoutRaisesEmcyAndRecovers) {
-  bool lost = false;
-  node->on_heartbeat_lost = [&](uint8_t n, uint64_t) { lost = n == 0x20; };
+  test::RecordingApplication app;
+  node->set_application(&app);
+  auto lost = [&] { return app.lost == std::vector<uint8_t>{0x20}; };
   ASSERT_EQ(sdo_write(0x1016, 1, (0x20u << 16) | 300, 4), 0u);
   tick_ms(1000);
-  EXPECT_FALSE(lost);  // monitoring starts with the first heartbeat
+  EXPECT_FALSE(lost());  // monitoring starts with the first heartbeat
   frame(CanFrame(0x720, {0x05}));
   sent.clear();
   tick_ms(400);
-  EXPECT_TRUE(lost);
+  EXPECT_TRUE(lost());
   auto emcy = with_id(0x85);
   ASSERT_EQ(emcy.size(), 1u);
   EXPECT_EQ(od::get_u16(emcy[0].data.data()), 0x8130);

@@ -1,6 +1,7 @@
 // The node's command line and TOML config: bad input is a UsageError with one line that
 // names the input; the [defaults] table sets object defaults.
 #include "node/config.hpp"
+#include "node/device.hpp"
 
 #include <gtest/gtest.h>
 
@@ -158,8 +159,8 @@ TEST_F(ConfigTest, DefaultsTableSetsObjectDefaults) {
   cfg.options.device.axes = 1;
   cfg.options.state_dir = dir.path;
   std::vector<CanFrame> sent;
-  CanopenNode node(cfg.options, [&](const CanFrame& f) { sent.push_back(f); });
-  apply_object_defaults(node.dictionary(), cfg.object_defaults);
+  Device device(cfg.options, cfg.object_defaults, [&](const CanFrame& f) { sent.push_back(f); });
+  CanopenNode& node = device.canopen();
   node.start(0);
   EXPECT_EQ(node.dictionary().get<uint16_t>(0x1017, 0), 250);
   EXPECT_EQ(node.dictionary().get<uint32_t>(0x1016, 1), 0x00200064u);

@@ -156,8 +156,11 @@ TEST_F(EmcyTest, NoEmcyInStoppedTheQueueGoesOutInPreOperational) {
   advance_ms(100);
   EXPECT_TRUE(emcys(from).empty());
   nmt(0x80);
-  ASSERT_EQ(emcys(from).size(), 1u);
-  EXPECT_EQ(emcy_code(emcys(from)[0]), 0x6200);
+  // Both queued in stopped: this one, and axis 1's %I8 (NMT Stopped ramps the axes down
+  // and latches it, as a lost master does).
+  ASSERT_EQ(emcys(from).size(), 2u);
+  EXPECT_EQ(emcy_code(emcys(from)[0]), 0xFF01);
+  EXPECT_EQ(emcy_code(emcys(from)[1]), 0x6200);
 }
 
 TEST_F(EmcyTest, ResetNodeForgetsActiveErrorsAndHistory) {

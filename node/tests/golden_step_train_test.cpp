@@ -15,8 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "node/hp_service.hpp"
-#include "node/motion_service.hpp"
 #include "node/tests/node_harness.hpp"
 #include "od/axis_bits.hpp"
 #include "od/axis_objects.hpp"
@@ -77,17 +75,8 @@ class GoldenTrains : public NodeHarness {
  protected:
   void SetUp() override {
     make(1);
-    od::DeviceInfo info;
-    info.node_id = kId;
-    info.axes = 1;
-    motion = std::make_unique<MotionService>(od(), info, node->emcy());
-    hp = std::make_unique<HpService>(od(), info, *motion, node->emcy());
-    node->on_advance = [this](uint64_t now) { hp->advance(now); };
-    node->on_reset_application = [this](uint64_t now) { hp->power_up(now); };
-    node->on_sync = [this](uint64_t now) { hp->on_sync(now, now); };
-    hp->power_up(t);
     nmt(0x01);
-    motion->machine().axes[0].trace_into(&train);
+    device->machine().axes[0].trace_into(&train);
   }
 
   // Compares the train with the recorded one (or records it), step by step.
@@ -131,8 +120,6 @@ class GoldenTrains : public NodeHarness {
   }
   void hp_sustain(double v) { ASSERT_EQ(put(hp_obj::index(0, hp_obj::kSustain), 0, v), 0u); }
 
-  std::unique_ptr<MotionService> motion;
-  std::unique_ptr<HpService> hp;
   Train train;
 };
 
@@ -147,7 +134,7 @@ TEST_F(GoldenTrains, HornerTrapezoid) {
   destination(-1200);
   command(cmd::kMoveAbsolute);
   advance_ms(6000);
-  ASSERT_EQ(motion->machine().axes[0].position(), -1200);
+  ASSERT_EQ(device->machine().axes[0].position(), -1200);
   check("horner_trapezoid");
 }
 

@@ -1,6 +1,7 @@
 // Heartbeat producer (0x1017) and consumer (0x1016), CiA 301 7.2.8.3.2 and 7.5.2.18/19,
 // in virtual time.
 #include "node/tests/node_harness.hpp"
+#include "node/tests/recording_application.hpp"
 
 namespace stepnode::node::test {
 namespace {
@@ -92,11 +93,12 @@ class HeartbeatConsumerTest : public HeartbeatTest {
  protected:
   void SetUp() override {
     HeartbeatTest::SetUp();
-    node->on_heartbeat_lost = [this](uint8_t n, uint64_t) { lost.push_back(n); };
+    node->set_application(&app);
     ASSERT_EQ(sdo_write(0x1016, 1, (0x20u << 16) | 300), 0u);
   }
   void heartbeat_of(uint8_t n, uint8_t state = 0x05) { frame(CanFrame(0x700u + n, {state})); }
-  std::vector<uint8_t> lost;
+  RecordingApplication app;
+  std::vector<uint8_t>& lost = app.lost;
 };
 
 TEST_F(HeartbeatConsumerTest, MonitoringStartsWithTheFirstHeartbeat) {

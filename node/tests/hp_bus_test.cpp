@@ -8,8 +8,6 @@
 #include <cmath>
 #include <memory>
 
-#include "node/hp_service.hpp"
-#include "node/motion_service.hpp"
 #include "node/tests/node_harness.hpp"
 #include "od/hp_objects.hpp"
 
@@ -22,18 +20,7 @@ class HpBus : public NodeHarness {
  protected:
   void SetUp() override { build(1); }
   void build(unsigned axes) {
-    hp.reset();
-    motion.reset();
     make(axes);
-    od::DeviceInfo info;
-    info.node_id = kId;
-    info.axes = axes;
-    motion = std::make_unique<MotionService>(od(), info, node->emcy());
-    hp = std::make_unique<HpService>(od(), info, *motion, node->emcy());
-    node->on_advance = [this](uint64_t now) { hp->advance(now); };
-    node->on_reset_application = [this](uint64_t now) { hp->power_up(now); };
-    node->on_sync = [this](uint64_t now) { hp->on_sync(now, now); };
-    hp->power_up(t);
     nmt(0x01);  // operational: TPDOs go out
   }
 
@@ -65,8 +52,6 @@ class HpBus : public NodeHarness {
   // HP-IB "WAIT n" / the operator's PAUSE: virtual time passes.
   void wait_s(double s) { advance_us(static_cast<uint64_t>(s * 1e6)); }
 
-  std::unique_ptr<MotionService> motion;
-  std::unique_ptr<HpService> hp;
 };
 
 constexpr uint32_t kDeviceState = 0x08000022, kIncompatible = 0x06040043;
@@ -341,7 +326,7 @@ TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
   ASSERT_EQ(trig(3), 0u);
   ASSERT_EQ(move(5, false, true), 0u);
   advance_us(3'000);
-  hp->on_sync(t, t - 700);  // the frame reached the socket 700 us before the node read it
+  device->on_frame(CanFrame(0x80, {}), t, t - 700);  // it reached the socket 700 us before it was read
   EXPECT_EQ(*sdo_read(index(0, kTiming), od::hp_timing_sub::kTriggerUs), static_cast<uint32_t>(t - 700));
   wait_s(1);
   EXPECT_EQ(mechanical(), 5);

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "node/tests/node_harness.hpp"
+#include "node/tests/recording_application.hpp"
 
 namespace stepnode::node::test {
 namespace {
@@ -77,8 +78,9 @@ TEST_F(NmtTest, EveryCommandFromEveryState) {
       make();
       go_to(from);
       advance_ms(10);
-      std::vector<NmtState> hooked;
-      node->on_state_change = [&](NmtState s, uint64_t) { hooked.push_back(s); };
+      RecordingApplication app;
+      node->set_application(&app);
+      std::vector<NmtState>& hooked = app.states;
       clear_sent();
       nmt(cs);
       NmtState expect = expected_after(cs);
@@ -96,7 +98,7 @@ TEST_F(NmtTest, EveryCommandFromEveryState) {
         EXPECT_TRUE(hb.empty());
         EXPECT_TRUE(hooked.empty());
       }
-      node->on_state_change = nullptr;
+      node->set_application(nullptr);
     }
   }
 }
@@ -246,8 +248,9 @@ TEST_F(NmtTest, ResetNodeRestoresEverythingAndBootsAgain) {
   for (NmtState from : kStates) {
     SCOPED_TRACE(state_name(from));
     make();
-    int resets = 0;
-    node->on_reset_application = [&](uint64_t) { ++resets; };
+    RecordingApplication app;
+    node->set_application(&app);
+    int& resets = app.resets;
     ASSERT_EQ(sdo_write(0x1017, 0, 250, 2), 0u);
     ASSERT_EQ(sdo_write(0x2F00, 1, 0xCAFE), 0u);
     go_to(from);
@@ -264,8 +267,9 @@ TEST_F(NmtTest, ResetNodeRestoresEverythingAndBootsAgain) {
 }
 
 TEST_F(NmtTest, ResetCommunicationDoesNotResetTheApplication) {
-  int resets = 0;
-  node->on_reset_application = [&](uint64_t) { ++resets; };
+  RecordingApplication app;
+  node->set_application(&app);
+  int& resets = app.resets;
   nmt(kResetComm);
   EXPECT_EQ(resets, 0);
   nmt(kResetNode);

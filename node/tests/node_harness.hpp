@@ -1,5 +1,6 @@
-// Test harness for the CiA 301 slave in virtual time: a CanopenNode with a fresh state
-// directory, a recorder of every frame it sends, and a master's view of the bus (NMT
+// Test harness for the node in virtual time: the whole device as node/device.* assembles
+// it (the CiA 301 slave, the axes on the simulated machine, the HP channels) with a fresh
+// state directory, a recorder of every frame it sends, and a master's view of the bus (NMT
 // commands, SYNC, hand-built SDO expedited transfers, the PDO mapping procedure).
 #pragma once
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "node/canopen_node.hpp"
+#include "node/device.hpp"
 #include "od/sdo_client.hpp"
 #include "od/value_codec.hpp"
 
@@ -51,27 +53,36 @@ class NodeHarness : public ::testing::Test {
   static constexpr uint32_t kEmcyId = 0x80 + kId;
 
   void SetUp() override { make(); }
-  void TearDown() override { node.reset(); }
+  void TearDown() override { stop(); }
 
   // A new node (a new process) on the same state directory, started at `t`.
-  void make(unsigned axes = 1) {
+  void make(unsigned axes = 1, const Device::ObjectDefaults& defaults = {}) {
     NodeOptions o;
     o.device.node_id = kId;
     o.device.axes = axes;
     o.state_dir = dir.path;
-    node.reset();
-    node = std::make_unique<CanopenNode>(o, [this](const CanFrame& f) {
+    make(o, defaults);
+  }
+  void make(const NodeOptions& o, const Device::ObjectDefaults& defaults = {}) {
+    stop();
+    device = std::make_unique<Device>(o, defaults, [this](const CanFrame& f) {
       sent.push_back(f);
       sent_at.push_back(t);
     });
+    node = &device->canopen();
     sent.clear();
     sent_at.clear();
-    node->start(t);
+    device->start(t);
+  }
+  // The process ends.
+  void stop() {
+    node = nullptr;
+    device.reset();
   }
 
   od::Dictionary& od() { return node->dictionary(); }
 
-  void frame(const CanFrame& f) { node->on_frame(f, t); }
+  void frame(const CanFrame& f) { device->on_frame(f, t); }
   void nmt(uint8_t cs, uint8_t target = kId) { frame(CanFrame(0, {cs, target})); }
   void sync() { frame(CanFrame(0x80, {})); }
   void sync(uint8_t counter) { frame(CanFrame(0x80, {counter})); }
@@ -81,7 +92,7 @@ class NodeHarness : public ::testing::Test {
     uint64_t end = t + us;
     while (t < end) {
       t = std::min(end, t + step_us);
-      node->on_tick(t);
+      device->on_tick(t);
     }
   }
   void advance_ms(uint64_t ms, uint64_t step_us = 1000) { advance_us(ms * 1000, step_us); }
@@ -197,7 +208,8 @@ class NodeHarness : public ::testing::Test {
   uint64_t t = 1'000'000;
   std::vector<CanFrame> sent;
   std::vector<uint64_t> sent_at;  // virtual time of each frame in `sent`
-  std::unique_ptr<CanopenNode> node;
+  std::unique_ptr<Device> device;
+  CanopenNode* node = nullptr;  // the device's CiA 301 slave
 
  private:
   // Finds the server's answer to (index, sub) among the frames sent since `before`.

@@ -19,14 +19,6 @@ class RpdoIllegalWords : public NodeHarness {
 
   void SetUp() override {
     NodeHarness::SetUp();
-    // The axes as node/main.cpp wires them.
-    od::DeviceInfo info;
-    info.node_id = kId;
-    info.axes = 1;
-    motion = std::make_unique<MotionService>(od(), info, node->emcy());
-    node->on_advance = [this](uint64_t now) { motion->advance(now); };
-    node->on_reset_application = [this](uint64_t now) { motion->power_up(now); };
-    motion->power_up(t);
     nmt(0x01);
     advance_ms(5);
     rpdo1(command::kClearErrors, 0);
@@ -49,10 +41,6 @@ class RpdoIllegalWords : public NodeHarness {
                             static_cast<uint8_t>(aq6), static_cast<uint8_t>(aq6 >> 8)}));
     advance_ms(2);
   }
-  void TearDown() override {
-    node.reset();
-    motion.reset();
-  }
   uint16_t status() { return static_cast<uint16_t>(*sdo_read(0x2001, 0)); }
   int32_t motor() { return static_cast<int32_t>(*sdo_read(0x2005, 0)); }
   bool emcy_ff01_since(size_t from) {
@@ -60,8 +48,6 @@ class RpdoIllegalWords : public NodeHarness {
       if (emcy_code(f) == 0xFF01) return true;
     return false;
   }
-
-  std::unique_ptr<MotionService> motion;
 };
 
 TEST_F(RpdoIllegalWords, DestinationOutsideTheModuleRangeSentWithTheCommandIsAnIllegalMove) {

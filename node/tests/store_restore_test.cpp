@@ -226,11 +226,7 @@ TEST_F(StoreRestoreTest, AMissingStateDirectoryIsCreatedOnSave) {
   o.device.node_id = kId;
   o.device.axes = 1;
   o.state_dir = sub;
-  node = std::make_unique<CanopenNode>(o, [this](const CanFrame& f) {
-    sent.push_back(f);
-    sent_at.push_back(t);
-  });
-  node->start(t);
+  make(o);
   EXPECT_EQ(node->state(), NmtState::PreOperational);
   ASSERT_EQ(sdo_write(0x1017, 0, 250, 2), 0u);
   ASSERT_EQ(sdo_write(0x1010, 1, kSave), 0u);

@@ -86,9 +86,9 @@ TEST_F(StoredValues, AConfiguredMappingNamingAMissingObjectKeepsTheBuiltInAndIsR
 }
 
 TEST_F(StoredValues, AConfigurationErrorFoundBeforeBootUpGoesOutAfterIt) {
-  node->report_at_power_up(emcy_code::kSoftware, {0x00, 0x1A, 0, 0, 0});
-  size_t from = sent.size();
-  node->start(t);
+  make(1, {{"1A00:1", "0x99990020"}});  // the device refuses the record, then boots
+  ASSERT_EQ(device->refused_mappings().size(), 1u);
+  size_t from = 0;
   // Boot-up first (EMCY may not be sent before), then EMCY 0x6100.
   ASSERT_GE(sent.size(), from + 2);
   EXPECT_EQ(sent[from].id, kHeartbeatId);

@@ -1,0 +1,30 @@
+// What the CiA 301 services drive: the device's profiles behind the dictionary. The
+// CanopenNode calls its one Application at these points; the device assembly
+// (node/device.*) is the application of the real node, and tests give their own.
+#pragma once
+#include <cstdint>
+
+#include "node/nmt.hpp"
+
+namespace stepnode::node {
+
+// The communication errors of CiA 301's error class "communication error" (0x1029 sub 1).
+enum class CommunicationError { HeartbeatLost, BusOff };
+
+class Application {
+ public:
+  virtual ~Application() = default;
+  // Brings the application up to `now_us`; called before every frame and tick, so a
+  // command in a frame acts on an application that is current to the microsecond.
+  virtual void advance(uint64_t /*now_us*/) {}
+  // Power-up and NMT reset node, after the stored parameters were loaded.
+  virtual void reset_application(uint64_t /*now_us*/) {}
+  // Every SYNC received (or produced here), after the synchronous PDOs.
+  virtual void sync(uint64_t /*now_us*/) {}
+  virtual void state_changed(NmtState /*state*/, uint64_t /*now_us*/) {}
+  // A communication error, before 0x1029's change of NMT state. `node`: the monitored node
+  // whose heartbeat was lost (0 for a bus-off).
+  virtual void communication_error(CommunicationError /*error*/, uint8_t /*node*/, uint64_t /*now_us*/) {}
+};
+
+}  // namespace stepnode::node

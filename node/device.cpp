@@ -1,0 +1,59 @@
+#include "node/device.hpp"
+
+#include <spdlog/spdlog.h>
+
+namespace stepnode::node {
+
+Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults, CanopenNode::Send send)
+    : canopen_(options, std::move(send)),
+      refused_(apply_object_defaults(canopen_.dictionary(), object_defaults)),
+      motion_(canopen_.dictionary(), options.device, canopen_.emcy()),
+      hp_(canopen_.dictionary(), options.device, motion_, canopen_.emcy()) {
+  for (const RefusedMapping& r : refused_) {
+    spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
+                 r.index, od::abort_text(r.reason));
+    // EMCY 0x6100 after boot-up, manufacturer bytes: the record's index, little-endian.
+    canopen_.report_at_power_up(emcy_code::kSoftware,
+                                {static_cast<uint8_t>(r.index), static_cast<uint8_t>(r.index >> 8), 0, 0, 0});
+  }
+  canopen_.set_application(this);
+}
+
+Device::~Device() { canopen_.set_application(nullptr); }
+
+void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
+  frame_arrival_us_ = arrival_us && arrival_us <= now_us ? arrival_us : 0;
+  canopen_.on_frame(frame, now_us);
+  frame_arrival_us_ = 0;
+}
+
+void Device::sync(uint64_t now_us) {
+  // TRIG SYS starts at the SYNC frame's arrival, not when the process got round to reading
+  // it: every node on the bus then starts together. A SYNC produced here: now.
+  hp_.on_sync(now_us, frame_arrival_us_ ? frame_arrival_us_ : now_us);
+}
+
+void Device::state_changed(NmtState state, uint64_t now_us) {
+  // NMT Stopped: no SDO and no PDO reach the axes any more, so the master has lost control
+  // of them; they ramp down and latch %I8 exactly as for a lost master (README, "NMT
+  // states and motion"). Pre-operational keeps SDO, and the axes keep their job.
+  if (state == NmtState::Stopped) {
+    spdlog::warn("NMT stopped: every moving axis ramps down");
+    motion_.master_lost(now_us);
+  }
+}
+
+void Device::communication_error(CommunicationError error, uint8_t node, uint64_t now_us) {
+  if (error == CommunicationError::HeartbeatLost && !is_master(node)) return;  // EMCY 0x8130 only
+  spdlog::warn("{}: every moving axis ramps down", error == CommunicationError::BusOff
+                                                       ? std::string("bus-off")
+                                                       : "master (node " + std::to_string(node) + ") lost");
+  motion_.master_lost(now_us);
+}
+
+bool Device::is_master(uint8_t node) {
+  const uint8_t master = canopen_.dictionary().get<uint8_t>(od::kMasterNodeId, 0);
+  return master == 0 || master == node;
+}
+
+}  // namespace stepnode::node

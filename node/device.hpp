@@ -1,0 +1,69 @@
+// The device assembly: the one place the node is put together. It builds the CiA 301
+// slave (CanopenNode), the Horner axes on the simulated machine (MotionService) and the
+// HP 44714A channels on the same axes (HpService) from the configuration, and is their
+// application: it advances them, powers them up, hands them SYNC, and applies the policy
+// for a lost master and for NMT Stopped. node/main.cpp, the benchmarks and the test
+// harnesses build the node through it and wire nothing themselves.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "node/application.hpp"
+#include "node/canopen_node.hpp"
+#include "node/config.hpp"
+#include "node/hp_service.hpp"
+#include "node/motion_service.hpp"
+
+namespace stepnode::node {
+
+class Device final : private Application {
+ public:
+  using ObjectDefaults = std::vector<std::pair<std::string, std::string>>;
+
+  // `object_defaults`: the configuration's [defaults] (throws UsageError for one that is
+  // wrong on its face; a mapping the device cannot use is kept built-in and reported by
+  // EMCY 0x6100 after boot-up, see refused_mappings()).
+  Device(const NodeOptions& options, const ObjectDefaults& object_defaults, CanopenNode::Send send);
+  ~Device() override;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  // Power-on: stored parameters, boot-up, pre-operational.
+  void start(uint64_t now_us) { canopen_.start(now_us); }
+  // A received frame. `arrival_us`: when it reached the bus interface (the kernel's
+  // timestamp, <= now_us; 0 when unknown), so TRIG SYS starts at the SYNC's arrival.
+  void on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
+  void on_tick(uint64_t now_us) { canopen_.on_tick(now_us); }
+  void on_bus_event(BusEvent event, uint64_t now_us) { canopen_.on_bus_event(event, now_us); }
+  void on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
+    canopen_.on_receive_overruns(socket_total, now_us);
+  }
+
+  CanopenNode& canopen() { return canopen_; }
+  od::Dictionary& dictionary() { return canopen_.dictionary(); }
+  MotionService& motion() { return motion_; }
+  HpService& hp() { return hp_; }
+  sim::Machine& machine() { return motion_.machine(); }
+  const std::vector<RefusedMapping>& refused_mappings() const { return refused_; }
+
+ private:
+  // Application: what the CanopenNode calls.
+  void advance(uint64_t now_us) override { hp_.advance(now_us); }  // the axes, then the channels
+  void reset_application(uint64_t now_us) override { hp_.power_up(now_us); }
+  void sync(uint64_t now_us) override;
+  void state_changed(NmtState state, uint64_t now_us) override;
+  void communication_error(CommunicationError error, uint8_t node, uint64_t now_us) override;
+
+  // 0x2F11: 0 makes every monitored node a master; otherwise only that node is.
+  bool is_master(uint8_t node);
+
+  CanopenNode canopen_;
+  std::vector<RefusedMapping> refused_;  // before the services: they load what it leaves
+  MotionService motion_;
+  HpService hp_;
+  uint64_t frame_arrival_us_ = 0;  // the frame being handled (0: none, or unknown)
+};
+
+}  // namespace stepnode::node
