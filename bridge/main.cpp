@@ -109,10 +109,17 @@ int main(int argc, char** argv) {
   }
   try {
     return run(cfg);
-  } catch (const std::exception& e) {
-    // The interface missing, not a CAN device, or a bad ROS 2 prefix: bad input as for
-    // stepnode, status 2, one line.
+  } catch (const canio::InterfaceError& e) {
+    // The interface missing or not CAN: bad input as for stepnode, status 2, one line.
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
+  } catch (const std::invalid_argument& e) {
+    // A ROS 2 prefix that is not a valid ROS 2 name (bridge/dds/naming.hpp): bad input.
+    std::fprintf(stderr, "stepbridge: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    // A runtime failure (the DDS participant could not be created, a socket call): 1.
+    std::fprintf(stderr, "stepbridge: %s\n", e.what());
+    return 1;
   }
 }

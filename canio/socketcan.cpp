@@ -3,6 +3,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <net/if_arp.h>
 #include <net/if.h>
 #include <spdlog/spdlog.h>
 #include <sys/ioctl.h>
@@ -24,13 +25,21 @@ namespace {
 
 SocketCan::SocketCan(const std::string& iface, bool receive_own) : iface_(iface) {
   if (iface.empty() || iface.size() >= IFNAMSIZ)
-    throw std::runtime_error("interface name '" + iface + "' is empty or too long");
+    throw InterfaceError("interface name '" + iface + "' is empty or too long");
   fd_ = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
   if (fd_ < 0) fail(iface, "cannot open a CAN socket (is SocketCAN in this kernel?)");
   unsigned index = ::if_nametoindex(iface.c_str());
   if (index == 0) {
     ::close(fd_);
-    throw std::runtime_error(iface + ": no such CAN interface");
+    throw InterfaceError(iface + ": no such CAN interface");
+  }
+  // An interface of another kind (Ethernet, loopback) would fail at bind with a bare
+  // "Invalid argument"; its hardware type says what is wrong.
+  ifreq request{};
+  std::memcpy(request.ifr_name, iface.c_str(), iface.size() + 1);
+  if (::ioctl(fd_, SIOCGIFHWADDR, &request) == 0 && request.ifr_hwaddr.sa_family != ARPHRD_CAN) {
+    ::close(fd_);
+    throw InterfaceError(iface + ": not a CAN interface");
   }
   // Error frames: everything the controller reports (bus-off, passive, overflow...);
   // kernel receive timestamps; the receive queue's drop count; own frames or not.

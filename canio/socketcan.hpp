@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -20,10 +21,18 @@ struct ReceivedFrame {
   uint8_t protocol_status = 0;
 };
 
+// The interface named is not one this process can use as a CAN bus: no such interface, a
+// name that cannot be one, or an interface that is not CAN (e.g. "lo"). Bad input: the
+// processes exit with status 2 for it, and 1 for the other (runtime) failures.
+struct InterfaceError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 class SocketCan {
  public:
-  // Opens and binds a raw socket on `iface`. Throws std::runtime_error naming the
-  // interface and the failing call (e.g. "vcan0: no such interface").
+  // Opens and binds a raw socket on `iface`. Throws InterfaceError for an interface that is
+  // missing or not CAN, std::runtime_error naming the interface and the failing call for the
+  // rest (no SocketCAN in the kernel, a socket option refused, bind).
   explicit SocketCan(const std::string& iface, bool receive_own = false);
   ~SocketCan();
   SocketCan(const SocketCan&) = delete;

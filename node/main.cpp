@@ -99,9 +99,14 @@ int main(int argc, char** argv) {
   } catch (const node::UsageError& e) {
     std::fprintf(stderr, "stepnode: %s\n", node::one_line(e.what()).c_str());
     return 2;
-  } catch (const std::exception& e) {
-    // The interface missing or not a CAN device is bad input too: one line, status 2.
+  } catch (const canio::InterfaceError& e) {
+    // The interface named is missing or not CAN: a bad argument too.
     std::fprintf(stderr, "stepnode: %s\n", node::one_line(e.what()).c_str());
     return 2;
+  } catch (const std::exception& e) {
+    // A runtime failure (no SocketCAN in the kernel, a socket or epoll call refused): one
+    // line, status 1.
+    std::fprintf(stderr, "stepnode: %s\n", node::one_line(e.what()).c_str());
+    return 1;
   }
 }

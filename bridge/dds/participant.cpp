@@ -21,13 +21,13 @@ using eprosima::fastrtps::types::ReturnCode_t;
 
 efd::DomainParticipant* create_participant(const ParticipantOptions& options) {
   if (options.domain > kMaxDomain)
-    throw std::runtime_error("domain " + std::to_string(options.domain) + ": must be 0.." + std::to_string(kMaxDomain));
+    throw std::invalid_argument("domain " + std::to_string(options.domain) + ": must be 0.." + std::to_string(kMaxDomain));
   auto* factory = efd::DomainParticipantFactory::get_instance();
   if (!options.profiles_file.empty()) {
     if (!std::filesystem::is_regular_file(options.profiles_file))
-      throw std::runtime_error("profiles " + options.profiles_file + ": cannot read file");
+      throw std::invalid_argument("profiles " + options.profiles_file + ": cannot read file");
     if (factory->load_XML_profiles_file(options.profiles_file) != ReturnCode_t::RETCODE_OK)
-      throw std::runtime_error("profiles " + options.profiles_file + ": Fast DDS rejected the XML");
+      throw std::invalid_argument("profiles " + options.profiles_file + ": Fast DDS rejected the XML");
   }
   // Loads the environment's default profile file (once per process) and makes its default
   // participant profile the default participant QoS. Must come before the QoS is read.
