@@ -48,7 +48,7 @@ void MotionService::load_config(unsigned a) {
   uint16_t c = index(a, kConfiguration);
   auto u8 = [&](uint8_t sub) { return dictionary_.get<uint8_t>(c, sub); };
   motion::AxisConfig cfg = axes_[a]->config();
-  cfg.encoder = static_cast<sim::EncoderKind>(u8(od::config_sub::kEncoderType));
+  cfg.encoder = static_cast<motion::EncoderKind>(u8(od::config_sub::kEncoderType));
   cfg.encoder_multiplier = u8(od::config_sub::kMultiplier);
   cfg.encoder_divisor = u8(od::config_sub::kDivisor);
   cfg.encoder_tolerance = u8(od::config_sub::kTolerance);

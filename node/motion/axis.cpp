@@ -48,7 +48,7 @@ bool Axis::origin_active() const {
 
 int32_t Axis::encoder_position() const {
   // The encoder belongs to the first motor (SPM30 3.3.2: axis 1's, whatever is selected).
-  if (config_.encoder == sim::EncoderKind::None) return selected_ == 0 ? motor_position_ : saved_[0].position;
+  if (config_.encoder == EncoderKind::None) return selected_ == 0 ? motor_position_ : saved_[0].position;
   int64_t steps = floor_div(motors_[0]->encoder_count() * config_.encoder_multiplier,
                             std::max<int64_t>(config_.encoder_divisor, 1));
   return static_cast<int32_t>(encoder_offset_ + steps);
@@ -332,13 +332,13 @@ void Axis::master_lost(Tick now) {
 }
 
 void Axis::check_position_valid() {
-  if (config_.encoder == sim::EncoderKind::None || config_.encoder_tolerance <= 0 || selected_ != 0) return;
+  if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 || selected_ != 0) return;
   if (std::llabs(int64_t{motor_position_} - encoder_position()) >= config_.encoder_tolerance)
     position_valid_ = false;  // SPM30 5.4: when the difference reaches the tolerance
 }
 
 void Axis::check_stall(const Step& step) {
-  if (!config_.stall_detection || config_.encoder == sim::EncoderKind::None || selected_ != 0) return;
+  if (!config_.stall_detection || config_.encoder == EncoderKind::None || selected_ != 0) return;
   // Over a window of commanded steps, the encoder must show at least 10% of the motion
   // (STP100 6.3.3). The window spans several encoder counts, so resolution is no issue.
   int64_t steps_per_count = (config_.encoder_multiplier + config_.encoder_divisor - 1) /

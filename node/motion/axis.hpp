@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "node/motion/axis_registers.hpp"
+#include "node/motion/encoder_kind.hpp"
 #include "node/motion/motor_port.hpp"
 #include "node/motion/step_generator.hpp"
-#include "node/sim/machine.hpp"  // EncoderKind
 
 namespace stepnode::motion {
 
@@ -21,7 +21,7 @@ struct AxisConfig {
   HomeMethod home_method = HomeMethod::Normal;
   OriginSource origin_source = OriginSource::HomeSwitch;
   bool limit_qualified_home = false;  // STP100 3.2.3; SPM30 does this with encoder QUAD
-  sim::EncoderKind encoder = sim::EncoderKind::None;
+  EncoderKind encoder = EncoderKind::None;
   int64_t encoder_multiplier = 1;  // 1..255
   int64_t encoder_divisor = 1;     // 1..16
   int64_t encoder_tolerance = 0;   // 0..255, 0 = no position validation

@@ -6,6 +6,7 @@
 #include <optional>
 #include <vector>
 
+#include "node/motion/encoder_kind.hpp"
 #include "node/motion/motor_port.hpp"
 
 namespace stepnode::sim {
@@ -17,7 +18,7 @@ struct Cam {
   bool contains(int64_t p) const { return p >= position && p < position + width; }
 };
 
-enum class EncoderKind : uint8_t { None = 0, Quadrature = 1, UpDown = 2, QuadratureNoMarker = 3 };
+using EncoderKind = motion::EncoderKind;
 
 struct AxisMachineConfig {
   std::optional<Cam> home;               // home switch

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
 
 namespace stepnode::motion {
 namespace {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
 
 namespace stepnode::motion {
 namespace {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "node/motion/hp_channel.hpp"
+#include "node/sim/machine.hpp"
 
 namespace stepnode::motion::hp {
 namespace {
