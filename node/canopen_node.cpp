@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "node/diagnostic_objects.hpp"
 #include "node/error_behaviour.hpp"
 #include "od/eds.hpp"
 #include "od/pdo_mapping.hpp"
@@ -15,12 +16,17 @@ std::filesystem::path parameter_file_for(const NodeOptions& o) {
   return o.state_dir / ("node-" + std::to_string(o.device.node_id) + ".params");
 }
 
+NodeOptions described(NodeOptions o) {
+  if (o.device.description.empty()) o.device.description = o.layout.description();
+  return o;
+}
+
 }  // namespace
 
 CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
-    : options_(std::move(options)),
+    : options_(described(std::move(options))),
       send_(std::move(send_frame)),
-      store_((od::build_device_dictionary(dictionary_, options_.device), dictionary_),
+      store_((add_node_objects(dictionary_, options_.device, options_.layout), dictionary_),
              parameter_file_for(options_)),
       emcy_(dictionary_, [this](const od::CanFrame& f) { send(f); }),
       heartbeat_(dictionary_, options_.device.node_id, [this](const od::CanFrame& f) { send(f); }),
@@ -48,7 +54,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
           }),
-      pdo_(dictionary_, od::pdo_count(options_.device), [this](const od::CanFrame& f) { send(f); },
+      pdo_(dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); },
            emcy_),
       sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }) {
   install_service_hooks();
@@ -103,7 +109,7 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
   ParameterStore::LoadReport report = store_.load_into_dictionary(first, last);
   // Stored mappings skip the mapping procedure: one naming an object this device does not
   // have (saved with two axes, started with one) is put back to its default record.
-  for (unsigned n = 0; n < od::pdo_count(options_.device); ++n)
+  for (unsigned n = 0; n < options_.layout.pdos(); ++n)
     for (unsigned base : {0x1600u, 0x1A00u}) {
       const auto index = static_cast<uint16_t>(base + n);
       od::SdoAbort a = od::check_mapping_record(dictionary_, index);
@@ -221,8 +227,8 @@ void CanopenNode::on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
   const uint32_t lost = socket_total - overruns_seen_;  // unsigned: survives the wrap
   if (lost == 0) return;
   overruns_seen_ = socket_total;
-  const uint32_t total = dictionary_.get<uint32_t>(od::kReceiveOverruns, 0) + lost;
-  dictionary_.put<uint32_t>(od::kReceiveOverruns, 0, total);
+  const uint32_t total = dictionary_.get<uint32_t>(kReceiveOverruns, 0) + lost;
+  dictionary_.put<uint32_t>(kReceiveOverruns, 0, total);
   spdlog::warn("CAN receive queue overflow: {} frames dropped ({} since reset)", lost, total);
   // CiA 301: 0x8110 CAN overrun (objects lost); manufacturer bytes: frames lost, LE.
   emcy_.report(emcy_code::kCanOverrun, error_bits::kCommunication,

@@ -16,13 +16,15 @@
 #include "node/sdo_server_channels.hpp"
 #include "node/sync.hpp"
 #include "od/can_frame.hpp"
-#include "od/device_dictionary.hpp"
+#include "node/device_objects.hpp"
+#include "od/communication_objects.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::node {
 
 struct NodeOptions {
   od::DeviceInfo device;
+  DeviceLayout layout;  // the profiles and axes (the PDO count follows)
   std::filesystem::path state_dir = ".";
   uint64_t sdo_timeout_us = 1'000'000;
 };
@@ -51,6 +53,7 @@ class CanopenNode {
 
   NmtState state() const { return state_; }
   uint8_t node_id() const { return options_.device.node_id; }
+  const od::DeviceInfo& device_info() const { return options_.device; }
   od::Dictionary& dictionary() { return dictionary_; }
   EmcyProducer& emcy() { return emcy_; }
   const std::filesystem::path& parameter_file() const { return store_.file(); }

@@ -56,15 +56,29 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
   }
   if (auto v = t["axes"]) {
     auto n = v.value<int64_t>();
-    if (!n || *n < 1 || *n > static_cast<int64_t>(od::kMaxAxes)) bad("axes", "must be an integer 1..8");
-    cfg.options.device.axes = static_cast<unsigned>(*n);
+    if (!n || *n < 1 || *n > static_cast<int64_t>(kMaxAxes)) bad("axes", "must be an integer 1..8");
+    cfg.options.layout.axes = static_cast<unsigned>(*n);
   }
   if (auto v = t["spm30_multiplexed"]) {
     auto on = v.value<bool>();
     if (!on) bad("spm30_multiplexed", "must be true or false");
     // SPM30 3-axis models: one register set and %Q1..%Q3 select one of three motors.
-    cfg.options.device.spm30_multiplexed = *on;
-    if (*on) cfg.options.device.axes = 1;
+    cfg.options.layout.spm30_multiplexed = *on;
+    if (*on) cfg.options.layout.axes = 1;
+  }
+  if (auto v = t["profiles"]) {
+    // The profiles the device has: any of "horner", "hp", "user" (default: all three).
+    auto* list = v.as_array();
+    if (!list) bad("profiles", "must be a list of \"horner\", \"hp\", \"user\"");
+    DeviceLayout& l = cfg.options.layout;
+    l.horner = l.hp = l.user = false;
+    for (const auto& item : *list) {
+      auto name = item.value<std::string>();
+      if (name && *name == "horner") l.horner = true;
+      else if (name && *name == "hp") l.hp = true;
+      else if (name && *name == "user") l.user = true;
+      else bad("profiles", "must be a list of \"horner\", \"hp\", \"user\"");
+    }
   }
   if (auto v = t["serial_number"]) {
     auto n = v.value<int64_t>();

@@ -2,13 +2,15 @@
 
 #include <spdlog/spdlog.h>
 
+#include "node/diagnostic_objects.hpp"
+
 namespace stepnode::node {
 
 Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults, CanopenNode::Send send)
     : canopen_(options, std::move(send)),
-      refused_(apply_object_defaults(canopen_.dictionary(), object_defaults)),
-      motion_(canopen_.dictionary(), options.device, canopen_.emcy()),
-      hp_(canopen_.dictionary(), options.device, motion_, canopen_.emcy()) {
+      refused_(complete_dictionary(canopen_, options.layout, object_defaults)),
+      motion_(canopen_.dictionary(), options.layout, canopen_.emcy()),
+      hp_(canopen_.dictionary(), options.layout, motion_, canopen_.emcy()) {
   for (const RefusedMapping& r : refused_) {
     spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
                  r.index, od::abort_text(r.reason));
@@ -20,6 +22,12 @@ Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults
 }
 
 Device::~Device() { canopen_.set_application(nullptr); }
+
+std::vector<RefusedMapping> Device::complete_dictionary(CanopenNode& canopen, const DeviceLayout& layout,
+                                                        const ObjectDefaults& object_defaults) {
+  add_profile_objects(canopen.dictionary(), layout);
+  return apply_object_defaults(canopen.dictionary(), object_defaults);
+}
 
 void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   frame_arrival_us_ = arrival_us && arrival_us <= now_us ? arrival_us : 0;
@@ -52,7 +60,7 @@ void Device::communication_error(CommunicationError error, uint8_t node, uint64_
 }
 
 bool Device::is_master(uint8_t node) {
-  const uint8_t master = canopen_.dictionary().get<uint8_t>(od::kMasterNodeId, 0);
+  const uint8_t master = canopen_.dictionary().get<uint8_t>(kMasterNodeId, 0);
   return master == 0 || master == node;
 }
 

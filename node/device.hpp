@@ -59,6 +59,10 @@ class Device final : private Application {
   // 0x2F11: 0 makes every monitored node a master; otherwise only that node is.
   bool is_master(uint8_t node);
 
+  // The profiles' objects, then the configuration's defaults over them.
+  static std::vector<RefusedMapping> complete_dictionary(CanopenNode& canopen, const DeviceLayout& layout,
+                                                         const ObjectDefaults& object_defaults);
+
   CanopenNode canopen_;
   std::vector<RefusedMapping> refused_;  // before the services: they load what it leaves
   MotionService motion_;

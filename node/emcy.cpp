@@ -1,6 +1,6 @@
 #include "node/emcy.hpp"
 
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 
 namespace stepnode::node {
 

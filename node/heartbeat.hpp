@@ -6,7 +6,7 @@
 
 #include "node/nmt.hpp"
 #include "od/can_frame.hpp"
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::node {

@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "od/hp_objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 
 namespace stepnode::node {
 
-using namespace od::hp_obj;
+using namespace hp44714a::obj;
 namespace hp = motion::hp;
 using od::SdoAbort;
 
@@ -28,10 +28,10 @@ bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
 
 }  // namespace
 
-HpService::HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, MotionService& motion,
+HpService::HpService(od::Dictionary& dictionary, const DeviceLayout& layout, MotionService& motion,
                      EmcyProducer& emcy)
     : dictionary_(dictionary), motion_(motion), emcy_(emcy) {
-  for (unsigned a = 0; a < info.axes; ++a) {
+  for (unsigned a = 0; a < layout.axes; ++a) {
     channels_.push_back(std::make_unique<hp::Channel>(motion_.axis(a), motion_.machine().axes.at(a)));
     hp::Channel& ch = *channels_.back();
     ch.on_interrupt = [this, a](uint8_t event, motion::Tick) {
@@ -39,7 +39,7 @@ HpService::HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, Mot
       uint8_t condition = 0;
       for (uint8_t b = event; b; b >>= 1) ++condition;
       if (condition >= 3)
-        emcy_.report(static_cast<uint16_t>(od::kHpInterruptEmcyBase + condition), error_bits::kManufacturer,
+        emcy_.report(static_cast<uint16_t>(hp44714a::kInterruptEmcyBase + condition), error_bits::kManufacturer,
                      {event, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
     };
     install_hooks(a);
@@ -55,7 +55,7 @@ SdoAbort HpService::result(unsigned a, hp::Error e) {
   if (e == hp::Error::None) return SdoAbort::None;
   if (e == hp::Error::ValueOutOfRange) return SdoAbort::InvalidValue;  // no HP error number
   uint8_t n = static_cast<uint8_t>(e);
-  emcy_.report(static_cast<uint16_t>(od::kHpErrorEmcyBase + n), error_bits::kManufacturer,
+  emcy_.report(static_cast<uint16_t>(hp44714a::kErrorEmcyBase + n), error_bits::kManufacturer,
                {n, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
   publish(a);
   return SdoAbort::DeviceState;
@@ -72,13 +72,13 @@ void HpService::install_hooks(unsigned a) {
     };
   };
   // PROFILE: subs 1-5 are staged; writing 1 to sub 6 gives the PROFILE command.
-  hook(kProfile, od::hp_profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
+  hook(kProfile, hp44714a::profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
     if (u8(d) != 1) return SdoAbort::None;
     uint16_t p = index(a, kProfile);
-    hp::Profile prof{static_cast<hp::ProfileMode>(dictionary_.get<uint8_t>(p, od::hp_profile_sub::kMode)),
-                     dictionary_.get<double>(p, od::hp_profile_sub::kMin), dictionary_.get<double>(p, od::hp_profile_sub::kMax),
-                     dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
-                     dictionary_.get<double>(p, od::hp_profile_sub::kLast)};
+    hp::Profile prof{static_cast<hp::ProfileMode>(dictionary_.get<uint8_t>(p, hp44714a::profile_sub::kMode)),
+                     dictionary_.get<double>(p, hp44714a::profile_sub::kMin), dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
+                     dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
+                     dictionary_.get<double>(p, hp44714a::profile_sub::kLast)};
     hp::Error e = hp::Error::None;
     hp::Conflict c = ch.profile(prof, now(), &e);
     if (e != hp::Error::None) return result(a, e);
@@ -89,11 +89,11 @@ void HpService::install_hooks(unsigned a) {
     if (s == 0 || !std::isfinite(s)) return SdoAbort::InvalidValue;
     return result(a, ch.pscale(s));
   });
-  auto nowait = [this, a] { return dictionary_.get<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait) != 0; };
-  hook(kMove, od::hp_move_sub::kRelative, [this, a, &ch, nowait](std::span<const uint8_t> d) {
+  auto nowait = [this, a] { return dictionary_.get<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait) != 0; };
+  hook(kMove, hp44714a::move_sub::kRelative, [this, a, &ch, nowait](std::span<const uint8_t> d) {
     return move_in_range(ch, real(d), false) ? result(a, ch.move(real(d), false, nowait(), now())) : SdoAbort::InvalidValue;
   });
-  hook(kMove, od::hp_move_sub::kAbsolute, [this, a, &ch, nowait](std::span<const uint8_t> d) {
+  hook(kMove, hp44714a::move_sub::kAbsolute, [this, a, &ch, nowait](std::span<const uint8_t> d) {
     return move_in_range(ch, real(d), true) ? result(a, ch.move(real(d), true, nowait(), now())) : SdoAbort::InvalidValue;
   });
   hook(kSustain, 0, [this, a, &ch, nowait](std::span<const uint8_t> d) {
@@ -111,31 +111,31 @@ void HpService::install_hooks(unsigned a) {
   auto standby = [this, a, &ch, out](uint8_t mode, uint8_t sense) {
     return result(a, ch.standby(static_cast<hp::StandbyMode>(mode), sense != 0, now()));
   };
-  hook(kOutput, od::hp_output_sub::kStandbyMode, [this, out, standby](std::span<const uint8_t> d) {
-    return standby(u8(d), dictionary_.get<uint8_t>(out, od::hp_output_sub::kStandbySense));
+  hook(kOutput, hp44714a::output_sub::kStandbyMode, [this, out, standby](std::span<const uint8_t> d) {
+    return standby(u8(d), dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbySense));
   });
-  hook(kOutput, od::hp_output_sub::kStandbySense, [this, out, standby](std::span<const uint8_t> d) {
-    return standby(dictionary_.get<uint8_t>(out, od::hp_output_sub::kStandbyMode), u8(d));
+  hook(kOutput, hp44714a::output_sub::kStandbySense, [this, out, standby](std::span<const uint8_t> d) {
+    return standby(dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbyMode), u8(d));
   });
-  for (uint8_t sub : {od::hp_output_sub::kPulseMode, od::hp_output_sub::kPstpSense, od::hp_output_sub::kNdirSense})
+  for (uint8_t sub : {hp44714a::output_sub::kPulseMode, hp44714a::output_sub::kPstpSense, hp44714a::output_sub::kNdirSense})
     hook(kOutput, sub, [this, out, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(out, s); };
-      ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(od::hp_output_sub::kPulseMode)),
-                              get(od::hp_output_sub::kPstpSense) != 0, get(od::hp_output_sub::kNdirSense) != 0});
+      ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(hp44714a::output_sub::kPulseMode)),
+                              get(hp44714a::output_sub::kPstpSense) != 0, get(hp44714a::output_sub::kNdirSense) != 0});
       return SdoAbort::None;
     });
   uint16_t lim = index(a, kLimits);
-  for (uint8_t sub : {od::hp_limits_sub::kPlimSense, od::hp_limits_sub::kNlimSense})
+  for (uint8_t sub : {hp44714a::limits_sub::kPlimSense, hp44714a::limits_sub::kNlimSense})
     hook(kLimits, sub, [this, lim, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(lim, s); };
-      ch.hardlim(get(od::hp_limits_sub::kPlimSense) != 0, get(od::hp_limits_sub::kNlimSense) != 0);
+      ch.hardlim(get(hp44714a::limits_sub::kPlimSense) != 0, get(hp44714a::limits_sub::kNlimSense) != 0);
       return SdoAbort::None;
     });
-  hook(kLimits, od::hp_limits_sub::kHaltMode, [this, &ch](std::span<const uint8_t> d) {
+  hook(kLimits, hp44714a::limits_sub::kHaltMode, [this, &ch](std::span<const uint8_t> d) {
     ch.halt_mode(static_cast<hp::HaltMode>(u8(d)), now());
     return SdoAbort::None;
   });
-  hook(kLimits, od::hp_limits_sub::kHaltSgl, [this, &ch](std::span<const uint8_t> d) {
+  hook(kLimits, hp44714a::limits_sub::kHaltSgl, [this, &ch](std::span<const uint8_t> d) {
     if (u8(d)) ch.halt_sgl(now());
     return SdoAbort::None;
   });
@@ -144,34 +144,34 @@ void HpService::install_hooks(unsigned a) {
   });
   od.at(index(a, kPosition), 0).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.pos_query()); };
   uint16_t q = index(a, kQuadrature);
-  hook(kQuadrature, od::hp_quad_sub::kQscale, [&ch](std::span<const uint8_t> d) {
+  hook(kQuadrature, hp44714a::quad_sub::kQscale, [&ch](std::span<const uint8_t> d) {
     if (!std::isfinite(real(d))) return SdoAbort::InvalidValue;
     ch.qscale(real(d));
     return SdoAbort::None;
   });
-  hook(kQuadrature, od::hp_quad_sub::kQindex, [&ch](std::span<const uint8_t> d) {
+  hook(kQuadrature, hp44714a::quad_sub::kQindex, [&ch](std::span<const uint8_t> d) {
     ch.qindex(static_cast<hp::QIndexMode>(u8(d)));
     return SdoAbort::None;
   });
-  od.at(q, od::hp_quad_sub::kQindex).on_read = [&ch](od::Bytes& v) {
+  od.at(q, hp44714a::quad_sub::kQindex).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(static_cast<uint8_t>(ch.qindex_mode()));
   };
-  od.at(q, od::hp_quad_sub::kQpos).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.qpos_query()); };
-  hook(kInterrupt, od::hp_intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
+  od.at(q, hp44714a::quad_sub::kQpos).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.qpos_query()); };
+  hook(kInterrupt, hp44714a::intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
     if (u8(d)) ch.enable_intr();
     else ch.disable_intr();
     return SdoAbort::None;
   });
-  od.at(index(a, kInterrupt), od::hp_intr_sub::kEnable).on_read = [&ch](od::Bytes& v) {
+  od.at(index(a, kInterrupt), hp44714a::intr_sub::kEnable).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);
   };
   uint16_t sim = sim_index(a);
-  od.at(sim, od::hp_sim_sub::kHaltInputHigh).validate = [this, a, &ch](std::span<const uint8_t> d) {
+  od.at(sim, hp44714a::sim_sub::kHaltInputHigh).validate = [this, a, &ch](std::span<const uint8_t> d) {
     ch.set_halt_input(u8(d) != 0, now());
     publish(a);
     return SdoAbort::None;
   };
-  od.at(sim, od::hp_sim_sub::kTestJumper).validate = [&ch](std::span<const uint8_t> d) {
+  od.at(sim, hp44714a::sim_sub::kTestJumper).validate = [&ch](std::span<const uint8_t> d) {
     ch.set_test_jumper(u8(d) != 0);
     return SdoAbort::None;
   };
@@ -184,11 +184,11 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3). One the
   // channel refuses (stored by a build with other limits) leaves the power-on profile, and
   // its objects show that one again; EMCY 0x5530 says a stored value was refused.
-  hp::Conflict c = ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, od::hp_profile_sub::kMode)),
-                                          dictionary_.get<double>(p, od::hp_profile_sub::kMin),
-                                          dictionary_.get<double>(p, od::hp_profile_sub::kMax),
-                                          dictionary_.get<double>(p, od::hp_profile_sub::kSlope),
-                                          dictionary_.get<double>(p, od::hp_profile_sub::kLast)},
+  hp::Conflict c = ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, hp44714a::profile_sub::kMode)),
+                                          dictionary_.get<double>(p, hp44714a::profile_sub::kMin),
+                                          dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
+                                          dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
+                                          dictionary_.get<double>(p, hp44714a::profile_sub::kLast)},
                               t);
   if (c != hp::Conflict::None) {
     spdlog::warn("stored PROFILE of HP channel {} is refused (conflict row {}); the power-on profile applies", a,
@@ -200,15 +200,15 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   double s = dictionary_.get<double>(index(a, kPscale), 0);
   if (s != 0 && std::isfinite(s)) ch.pscale(s);
   ch.delay(dictionary_.get<uint16_t>(index(a, kDelay), 0));
-  ch.standby(static_cast<hp::StandbyMode>(g8(out, od::hp_output_sub::kStandbyMode)),
-             g8(out, od::hp_output_sub::kStandbySense) != 0, t);
-  ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(g8(out, od::hp_output_sub::kPulseMode)),
-                          g8(out, od::hp_output_sub::kPstpSense) != 0, g8(out, od::hp_output_sub::kNdirSense) != 0});
-  ch.hardlim(g8(lim, od::hp_limits_sub::kPlimSense) != 0, g8(lim, od::hp_limits_sub::kNlimSense) != 0);
-  ch.halt_mode(static_cast<hp::HaltMode>(g8(lim, od::hp_limits_sub::kHaltMode)), t);
-  ch.qscale(dictionary_.get<double>(index(a, kQuadrature), od::hp_quad_sub::kQscale));
-  ch.set_halt_input(g8(sim_index(a), od::hp_sim_sub::kHaltInputHigh) != 0, t);
-  ch.set_test_jumper(g8(sim_index(a), od::hp_sim_sub::kTestJumper) != 0);
+  ch.standby(static_cast<hp::StandbyMode>(g8(out, hp44714a::output_sub::kStandbyMode)),
+             g8(out, hp44714a::output_sub::kStandbySense) != 0, t);
+  ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(g8(out, hp44714a::output_sub::kPulseMode)),
+                          g8(out, hp44714a::output_sub::kPstpSense) != 0, g8(out, hp44714a::output_sub::kNdirSense) != 0});
+  ch.hardlim(g8(lim, hp44714a::limits_sub::kPlimSense) != 0, g8(lim, hp44714a::limits_sub::kNlimSense) != 0);
+  ch.halt_mode(static_cast<hp::HaltMode>(g8(lim, hp44714a::limits_sub::kHaltMode)), t);
+  ch.qscale(dictionary_.get<double>(index(a, kQuadrature), hp44714a::quad_sub::kQscale));
+  ch.set_halt_input(g8(sim_index(a), hp44714a::sim_sub::kHaltInputHigh) != 0, t);
+  ch.set_test_jumper(g8(sim_index(a), hp44714a::sim_sub::kTestJumper) != 0);
 }
 
 void HpService::publish(unsigned a) {
@@ -217,23 +217,23 @@ void HpService::publish(unsigned a) {
   od.put<int8_t>(index(a, kDone), 0, static_cast<int8_t>(ch.done()));
   od.put<uint8_t>(index(a, kError), 0, static_cast<uint8_t>(ch.last_error()));
   od.put<uint8_t>(index(a, kConflict), 0, static_cast<uint8_t>(ch.last_conflict()));
-  od.put<uint8_t>(index(a, kInterrupt), od::hp_intr_sub::kEvents, ch.interrupt_events());
+  od.put<uint8_t>(index(a, kInterrupt), hp44714a::intr_sub::kEvents, ch.interrupt_events());
   uint16_t out = index(a, kOutput);
-  od.put<uint8_t>(out, od::hp_output_sub::kStbyLevel, ch.stby_output_high() ? 1 : 0);
-  od.put<uint8_t>(out, od::hp_output_sub::kMotorPowered, ch.motor_powered() ? 1 : 0);
+  od.put<uint8_t>(out, hp44714a::output_sub::kStbyLevel, ch.stby_output_high() ? 1 : 0);
+  od.put<uint8_t>(out, hp44714a::output_sub::kMotorPowered, ch.motor_powered() ? 1 : 0);
   // In the simulation the STBY output drives motor power (issue 4): with STANDBY ON a
   // Horner move still counts its steps, but the load does not move.
   motion_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
-  od.put<uint32_t>(out, od::hp_output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
-  od.put<uint32_t>(out, od::hp_output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
+  od.put<uint32_t>(out, hp44714a::output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
+  od.put<uint32_t>(out, hp44714a::output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
   od.put<double>(index(a, kPosition), 0, ch.pos_query());
-  od.put<int32_t>(index(a, kQuadrature), od::hp_quad_sub::kCount, ch.quadrature_count());
+  od.put<int32_t>(index(a, kQuadrature), hp44714a::quad_sub::kCount, ch.quadrature_count());
   uint16_t t = index(a, kTiming);
   if (auto trig = ch.trigger_time()) {
-    od.put<uint32_t>(t, od::hp_timing_sub::kTriggerUs, static_cast<uint32_t>(motion_.micros(*trig)));
+    od.put<uint32_t>(t, hp44714a::timing_sub::kTriggerUs, static_cast<uint32_t>(motion_.micros(*trig)));
     auto first = ch.first_step_time();
-    od.put<uint32_t>(t, od::hp_timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(motion_.micros(*first)) : 0);
-    od.put<int32_t>(t, od::hp_timing_sub::kFirstStepAfterTriggerUs,
+    od.put<uint32_t>(t, hp44714a::timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(motion_.micros(*first)) : 0);
+    od.put<int32_t>(t, hp44714a::timing_sub::kFirstStepAfterTriggerUs,
                     first ? static_cast<int32_t>(motion_.micros(*first) - motion_.micros(*trig)) : -1);
   }
 }

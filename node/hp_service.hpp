@@ -12,14 +12,14 @@
 #include "node/emcy.hpp"
 #include "node/motion/hp_channel.hpp"
 #include "node/motion_service.hpp"
-#include "od/device_dictionary.hpp"
+#include "node/device_objects.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::node {
 
 class HpService {
  public:
-  HpService(od::Dictionary& dictionary, const od::DeviceInfo& info, MotionService& motion, EmcyProducer& emcy);
+  HpService(od::Dictionary& dictionary, const DeviceLayout& layout, MotionService& motion, EmcyProducer& emcy);
 
   // Brings the axes and channels to `now_us` and publishes both (use instead of
   // MotionService::advance).

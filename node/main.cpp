@@ -69,7 +69,7 @@ int run(const node::NodeConfig& cfg) {
     can.flush();
   });
   spdlog::info("node {} on {}, {} axes, parameters in {}", cfg.options.device.node_id, cfg.iface,
-               cfg.options.device.axes, device.canopen().parameter_file().string());
+               cfg.options.layout.axes, device.canopen().parameter_file().string());
   device.start(canio::EventLoop::now_us());
   loop.run();
   spdlog::info("stopping");
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
       // log would land in the EDS on stdout.
       spdlog::set_level(spdlog::level::off);
       node::Device device(cfg.options, cfg.object_defaults, [](const od::CanFrame&) {});
-      std::cout << od::write_eds(device.dictionary(), cfg.options.device);
+      std::cout << od::write_eds(device.dictionary(), device.canopen().device_info());
       return 0;
     }
     return run(cfg);

@@ -2,19 +2,20 @@
 
 #include <cmath>
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
+#include "node/profiles/sim/objects.hpp"
 
 namespace stepnode::node {
 
-using namespace od::axis_obj;
-namespace sim_obj = od::sim_obj;
+using namespace horner::obj;
+namespace sim_obj = sim::obj;
 
-MotionService::MotionService(od::Dictionary& dictionary, const od::DeviceInfo& info, EmcyProducer& emcy)
-    : dictionary_(dictionary), emcy_(emcy), count_(info.axes), motors_(od::motor_count(info)) {
+MotionService::MotionService(od::Dictionary& dictionary, const DeviceLayout& layout, EmcyProducer& emcy)
+    : dictionary_(dictionary), emcy_(emcy), count_(layout.axes), motors_(layout.motors()) {
   machine_.axes.resize(motors_);
   for (unsigned a = 0; a < count_; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
-    if (info.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
+    if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
     axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, motors, &machine_.emergency_stop));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) { on_axis_event(a, e); };
   }
@@ -32,15 +33,15 @@ void MotionService::load_words(unsigned a) {
   motion::CommandWords& w = axes_[a]->words();
   w.destination = dictionary_.get<int32_t>(index(a, kDestination), 0);
   uint16_t p = index(a, kProfile), ix = index(a, kIndexedMove);
-  w.velocity_divisor = dictionary_.get<uint16_t>(p, od::profile_sub::kVelocityDivisor);
-  w.base_velocity = dictionary_.get<uint16_t>(p, od::profile_sub::kBaseVelocity);
-  w.running_velocity = dictionary_.get<uint16_t>(p, od::profile_sub::kRunningVelocity);
-  w.acceleration_ms = dictionary_.get<uint16_t>(p, od::profile_sub::kAcceleration);
-  w.deceleration_ms = dictionary_.get<uint16_t>(p, od::profile_sub::kDeceleration);
-  w.index_destination = dictionary_.get<uint32_t>(ix, od::indexed_sub::kDestination);
-  w.index_deceleration_ms = dictionary_.get<uint16_t>(ix, od::indexed_sub::kDeceleration);
-  w.index_window_open = dictionary_.get<uint32_t>(ix, od::indexed_sub::kWindowOpen);
-  w.index_window_close = dictionary_.get<uint32_t>(ix, od::indexed_sub::kWindowClose);
+  w.velocity_divisor = dictionary_.get<uint16_t>(p, horner::profile_sub::kVelocityDivisor);
+  w.base_velocity = dictionary_.get<uint16_t>(p, horner::profile_sub::kBaseVelocity);
+  w.running_velocity = dictionary_.get<uint16_t>(p, horner::profile_sub::kRunningVelocity);
+  w.acceleration_ms = dictionary_.get<uint16_t>(p, horner::profile_sub::kAcceleration);
+  w.deceleration_ms = dictionary_.get<uint16_t>(p, horner::profile_sub::kDeceleration);
+  w.index_destination = dictionary_.get<uint32_t>(ix, horner::indexed_sub::kDestination);
+  w.index_deceleration_ms = dictionary_.get<uint16_t>(ix, horner::indexed_sub::kDeceleration);
+  w.index_window_open = dictionary_.get<uint32_t>(ix, horner::indexed_sub::kWindowOpen);
+  w.index_window_close = dictionary_.get<uint32_t>(ix, horner::indexed_sub::kWindowClose);
   refused_words_[a]->overlay(w);
 }
 
@@ -48,18 +49,18 @@ void MotionService::load_config(unsigned a) {
   uint16_t c = index(a, kConfiguration);
   auto u8 = [&](uint8_t sub) { return dictionary_.get<uint8_t>(c, sub); };
   motion::AxisConfig cfg = axes_[a]->config();
-  cfg.encoder = static_cast<motion::EncoderKind>(u8(od::config_sub::kEncoderType));
-  cfg.encoder_multiplier = u8(od::config_sub::kMultiplier);
-  cfg.encoder_divisor = u8(od::config_sub::kDivisor);
-  cfg.encoder_tolerance = u8(od::config_sub::kTolerance);
-  cfg.stall_detection = u8(od::config_sub::kStallDetection) != 0;
-  cfg.home_method = u8(od::config_sub::kHomeMethod) ? motion::AxisConfig::HomeMethod::Simple
+  cfg.encoder = static_cast<motion::EncoderKind>(u8(horner::config_sub::kEncoderType));
+  cfg.encoder_multiplier = u8(horner::config_sub::kMultiplier);
+  cfg.encoder_divisor = u8(horner::config_sub::kDivisor);
+  cfg.encoder_tolerance = u8(horner::config_sub::kTolerance);
+  cfg.stall_detection = u8(horner::config_sub::kStallDetection) != 0;
+  cfg.home_method = u8(horner::config_sub::kHomeMethod) ? motion::AxisConfig::HomeMethod::Simple
                                                     : motion::AxisConfig::HomeMethod::Normal;
-  cfg.origin_source = u8(od::config_sub::kOriginSource) ? motion::AxisConfig::OriginSource::Marker
+  cfg.origin_source = u8(horner::config_sub::kOriginSource) ? motion::AxisConfig::OriginSource::Marker
                                                         : motion::AxisConfig::OriginSource::HomeSwitch;
-  cfg.limit_qualified_home = u8(od::config_sub::kLimitQualified) != 0;
-  cfg.limit_started_moves = u8(od::config_sub::kLimitStartedMoves) != 0;
-  cfg.indexed_moves = u8(od::config_sub::kIndexedMoves) != 0;
+  cfg.limit_qualified_home = u8(horner::config_sub::kLimitQualified) != 0;
+  cfg.limit_started_moves = u8(horner::config_sub::kLimitStartedMoves) != 0;
+  cfg.indexed_moves = u8(horner::config_sub::kIndexedMoves) != 0;
   axes_[a]->set_config(cfg);
   machine_.axes[a].config().encoder = cfg.encoder;  // the encoder is on the axis' first motor
 }
@@ -70,7 +71,7 @@ void MotionService::load_machine(unsigned a) {  // a: the motor
   auto i32 = [&](uint16_t i, uint8_t s) { return int64_t{dictionary_.get<int32_t>(i, s)}; };
   auto on = [&](uint16_t i, uint8_t s) { return dictionary_.get<uint8_t>(i, s) != 0; };
   sim::AxisMachineConfig& m = machine_.axes[a].config();
-  using namespace od;
+  using namespace sim;
   int64_t home_width = i32(sw, switches_sub::kHomeWidth);
   m.home = home_width > 0 ? std::optional<sim::Cam>(sim::Cam{i32(sw, switches_sub::kHomePosition), home_width})
                           : std::nullopt;
@@ -111,9 +112,9 @@ void MotionService::install_hooks() {
             load_machine(m);
             advance(now_us_);  // an input may have changed under a moving axis
           };
-    dictionary_.at(sim_obj::index(m, sim_obj::kFaults), od::faults_sub::kDisplace).on_written = [this, m] {
+    dictionary_.at(sim_obj::index(m, sim_obj::kFaults), sim::faults_sub::kDisplace).on_written = [this, m] {
       machine_.axes[m].displace(dictionary_.get<int32_t>(sim_obj::index(m, sim_obj::kFaults),
-                                                         od::faults_sub::kDisplace));
+                                                         sim::faults_sub::kDisplace));
       advance(now_us_);
     };
   }

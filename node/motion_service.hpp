@@ -11,14 +11,14 @@
 #include "node/motion/axis.hpp"
 #include "node/refused_words.hpp"
 #include "node/sim/machine.hpp"
-#include "od/device_dictionary.hpp"
+#include "node/device_objects.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::node {
 
 class MotionService {
  public:
-  MotionService(od::Dictionary& dictionary, const od::DeviceInfo& info, EmcyProducer& emcy);
+  MotionService(od::Dictionary& dictionary, const DeviceLayout& layout, EmcyProducer& emcy);
 
   // Brings every axis up to `now_us` (CLOCK_MONOTONIC or virtual) and publishes.
   void advance(uint64_t now_us);

@@ -1,6 +1,6 @@
 #include "node/refused_words.hpp"
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::node {
 namespace {
@@ -16,11 +16,11 @@ T as(uint64_t raw) {
 }  // namespace
 
 RefusedWords::RefusedWords(od::Dictionary& dictionary, unsigned a) : axis_(a) {
-  using namespace od::axis_obj;
+  using namespace horner::obj;
   watch(dictionary.at(index(a, kDestination), 0));
-  for (uint8_t sub = od::profile_sub::kVelocityDivisor; sub <= od::profile_sub::kDeceleration; ++sub)
+  for (uint8_t sub = horner::profile_sub::kVelocityDivisor; sub <= horner::profile_sub::kDeceleration; ++sub)
     watch(dictionary.at(index(a, kProfile), sub));
-  for (uint8_t sub = od::indexed_sub::kDestination; sub <= od::indexed_sub::kWindowClose; ++sub)
+  for (uint8_t sub = horner::indexed_sub::kDestination; sub <= horner::indexed_sub::kWindowClose; ++sub)
     watch(dictionary.at(index(a, kIndexedMove), sub));
 }
 
@@ -39,7 +39,7 @@ void RefusedWords::watch(od::Entry& entry) {
 }
 
 void RefusedWords::overlay(motion::CommandWords& w) const {
-  using namespace od::axis_obj;
+  using namespace horner::obj;
   for (const auto& [k, raw] : refused_) {
     uint16_t offset = static_cast<uint16_t>((k >> 8) - index(axis_, 0));
     auto sub = static_cast<uint8_t>(k & 0xFF);
@@ -47,18 +47,18 @@ void RefusedWords::overlay(motion::CommandWords& w) const {
       w.destination = as<int32_t>(raw);
     } else if (offset == kProfile) {
       switch (sub) {
-        case od::profile_sub::kVelocityDivisor: w.velocity_divisor = as<uint16_t>(raw); break;
-        case od::profile_sub::kBaseVelocity: w.base_velocity = as<uint16_t>(raw); break;
-        case od::profile_sub::kRunningVelocity: w.running_velocity = as<uint16_t>(raw); break;
-        case od::profile_sub::kAcceleration: w.acceleration_ms = as<uint16_t>(raw); break;
-        case od::profile_sub::kDeceleration: w.deceleration_ms = as<uint16_t>(raw); break;
+        case horner::profile_sub::kVelocityDivisor: w.velocity_divisor = as<uint16_t>(raw); break;
+        case horner::profile_sub::kBaseVelocity: w.base_velocity = as<uint16_t>(raw); break;
+        case horner::profile_sub::kRunningVelocity: w.running_velocity = as<uint16_t>(raw); break;
+        case horner::profile_sub::kAcceleration: w.acceleration_ms = as<uint16_t>(raw); break;
+        case horner::profile_sub::kDeceleration: w.deceleration_ms = as<uint16_t>(raw); break;
       }
     } else if (offset == kIndexedMove) {
       switch (sub) {
-        case od::indexed_sub::kDestination: w.index_destination = as<uint32_t>(raw); break;
-        case od::indexed_sub::kDeceleration: w.index_deceleration_ms = as<uint16_t>(raw); break;
-        case od::indexed_sub::kWindowOpen: w.index_window_open = as<uint32_t>(raw); break;
-        case od::indexed_sub::kWindowClose: w.index_window_close = as<uint32_t>(raw); break;
+        case horner::indexed_sub::kDestination: w.index_destination = as<uint32_t>(raw); break;
+        case horner::indexed_sub::kDeceleration: w.index_deceleration_ms = as<uint16_t>(raw); break;
+        case horner::indexed_sub::kWindowOpen: w.index_window_open = as<uint32_t>(raw); break;
+        case horner::indexed_sub::kWindowClose: w.index_window_close = as<uint32_t>(raw); break;
       }
     }
   }

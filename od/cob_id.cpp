@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 
 namespace stepnode::od {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::od {

@@ -23,17 +23,6 @@ const char* specific(uint16_t code) {
     case 0x9000: return "external error";
     case 0xF000: return "additional functions";
     case 0xFF00: return "device specific";
-    // The HP 44714A channels (od/hp_objects.hpp): interrupts for halts and limits, and the
-    // error numbers of the manual's Error Message Summary (3-3).
-    case 0xFF43: return "HP interrupt: a hard limit stopped pulses";
-    case 0xFF44: return "HP interrupt: HALT SGL stopped pulses";
-    case 0xFF45: return "HP interrupt: the HALT switch stopped pulses";
-    case 0xFF59: return "HP error 89 ACCESSORY BUSY";
-    case 0xFF5A: return "HP error 90 NO ACTION DEFINED";
-    case 0xFF5B: return "HP error 91 MUST STOP TO CHANGE DIRECTION";
-    case 0xFF5C: return "HP error 92 NOT VALID IN WIDTH MODE";
-    case 0xFF5D: return "HP error 93 TERMINAL CARD TEST JUMPER SET";
-    case 0xFF5E: return "HP error 94 CANNOT MOVE WHILE STANDBY ON";
     default: return nullptr;
   }
 }

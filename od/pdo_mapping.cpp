@@ -110,4 +110,14 @@ SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
   return first;
 }
 
+void set_default_mapping(Dictionary& dictionary, uint16_t map_index, std::initializer_list<uint32_t> words) {
+  uint8_t n = 0;
+  for (uint32_t w : words) {
+    Entry& e = dictionary.at(map_index, ++n);
+    e.default_value = e.value = encode<uint32_t>(w);
+  }
+  Entry& count = dictionary.at(map_index, 0);
+  count.default_value = count.value = {n};
+}
+
 }  // namespace stepnode::od

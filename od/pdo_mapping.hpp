@@ -2,6 +2,7 @@
 // packing/unpacking PDO data bit-exactly, little-endian.
 #pragma once
 #include <cstdint>
+#include <initializer_list>
 #include <span>
 #include <vector>
 
@@ -40,6 +41,14 @@ SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> w
 SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index);
 inline bool is_rpdo_mapping(uint16_t index) { return index >= 0x1600 && index <= 0x17FF; }
 inline bool is_tpdo_mapping(uint16_t index) { return index >= 0x1A00 && index <= 0x1BFF; }
+
+// A mapping entry (CiA 301 7.5.2.36): index << 16 | sub << 8 | length in bits.
+constexpr uint32_t mapping_word(uint16_t index, uint8_t sub, uint8_t bits) {
+  return (static_cast<uint32_t>(index) << 16) | (static_cast<uint32_t>(sub) << 8) | bits;
+}
+// Makes `words` the default (and present) mapping of the record `map_index` (0x1600+n or
+// 0x1A00+n), with sub 0 their count: a profile's default PDOs.
+void set_default_mapping(Dictionary& dictionary, uint16_t map_index, std::initializer_list<uint32_t> words);
 
 size_t mapping_bits(const PdoMapping& mapping);
 inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(mapping) + 7) / 8; }

@@ -6,12 +6,12 @@
 #include <string_view>
 
 #include "bridge/samples.hpp"
-#include "od/axis_bits.hpp"
+#include "node/profiles/horner/bits.hpp"
 
 namespace stepnode::bridge::dds {
 
 // Status word bits (%I1..%I16 as bits 0..15 of 0x2n01).
-namespace status_bit = od::axis_status;
+namespace status_bit = horner::status;
 
 ::stepnode::AxisStatus to_idl(const AxisStatusSample& s);
 ::stepnode::AxisPosition to_idl(const AxisPositionSample& s);

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <iterator>
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::bridge {
 namespace {
@@ -74,13 +74,13 @@ SdoRead DiscoveryPlan::next() const {
     case Phase::HeartbeatTime: return {kHeartbeatTime, 0};
     case Phase::Identity: return {kIdentity, static_cast<uint8_t>(k_)};
     case Phase::Name: return {kDeviceName, 0};
-    case Phase::AxisProbe: return {od::axis_obj::index(k_, od::axis_obj::kStatusBits), 0};
-    case Phase::Pscale: return {od::axis_obj::index(k_, kPscaleOffset), 0};
+    case Phase::AxisProbe: return {horner::obj::index(k_, horner::obj::kStatusBits), 0};
+    case Phase::Pscale: return {horner::obj::index(k_, kPscaleOffset), 0};
     case Phase::TpdoComm: return {static_cast<uint16_t>(kTpdoComm + k_), 1};
     case Phase::TpdoCount: return {static_cast<uint16_t>(kTpdoMap + k_), 0};
     case Phase::TpdoEntry: return {static_cast<uint16_t>(kTpdoMap + k_), entry_};
     case Phase::Snapshot:
-      return {od::axis_obj::index(k_, kSnapshotOffsets[entry_]), 0};
+      return {horner::obj::index(k_, kSnapshotOffsets[entry_]), 0};
     case Phase::Done: break;
   }
   return {};

@@ -1,6 +1,6 @@
 #include "bridge/observer/tpdo_decoder.hpp"
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::bridge {
 namespace {
@@ -21,7 +21,7 @@ int64_t sign_extend(uint64_t v, unsigned bits) {
 MappedAxisField axis_field_of(const od::MappedEntry& e) {
   if (e.index < kAxisBlocksFirst || e.index > kAxisBlocksLast || e.sub != 0) return {};
   const auto axis = static_cast<uint8_t>((e.index - kAxisBlocksFirst) >> 8);
-  using namespace od::axis_obj;
+  using namespace horner::obj;
   switch (e.index & 0xFF) {
     case kStatusBits: return {axis, AxisField::StatusBits};
     case kMotorPosition: return {axis, AxisField::MotorPosition};

@@ -12,7 +12,8 @@
 #include <filesystem>
 
 #include "node/device.hpp"
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
+#include "node/profiles/sim/objects.hpp"
 
 using namespace stepnode;
 
@@ -48,7 +49,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--tick-us")) tick_us = std::strtoull(argv[i + 1], nullptr, 10);
   }
   node::NodeOptions options;
-  options.device.axes = 3;
+  options.layout.axes = 3;
   options.state_dir = std::filesystem::temp_directory_path() / "stepnode-bench";
   uint64_t frames = 0;
   node::Device device(options, {}, [&frames](const od::CanFrame&) { ++frames; });
@@ -57,15 +58,15 @@ int main(int argc, char** argv) {
   device.on_frame(od::CanFrame(0, {0x01, 0}), t0);  // NMT start: TPDOs flow as on a bus
 
   od::Dictionary& od = device.dictionary();
-  using namespace od::axis_obj;
+  using namespace horner::obj;
   for (unsigned a = 0; a < 3; ++a) {
     uint16_t p = index(a, kProfile);
-    write(od, p, od::profile_sub::kVelocityDivisor, od::encode<uint16_t>(20));  // 30 steps/s units
-    write(od, p, od::profile_sub::kBaseVelocity, od::encode<uint16_t>(1));
-    write(od, p, od::profile_sub::kRunningVelocity, od::encode<uint16_t>(8191));  // 245,730 steps/s
-    write(od, p, od::profile_sub::kAcceleration, od::encode<uint16_t>(100));
-    write(od, od::sim_obj::index(a, od::sim_obj::kSwitches), od::switches_sub::kLowerLimitEnabled, {0});
-    write(od, od::sim_obj::index(a, od::sim_obj::kSwitches), od::switches_sub::kUpperLimitEnabled, {0});
+    write(od, p, horner::profile_sub::kVelocityDivisor, od::encode<uint16_t>(20));  // 30 steps/s units
+    write(od, p, horner::profile_sub::kBaseVelocity, od::encode<uint16_t>(1));
+    write(od, p, horner::profile_sub::kRunningVelocity, od::encode<uint16_t>(8191));  // 245,730 steps/s
+    write(od, p, horner::profile_sub::kAcceleration, od::encode<uint16_t>(100));
+    write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
+    write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
     write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 13));  // clear errors
     write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(0));
     write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 5));  // jog up: runs until released

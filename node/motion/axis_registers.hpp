@@ -3,13 +3,13 @@
 #pragma once
 #include <cstdint>
 
-#include "od/axis_bits.hpp"
+#include "node/profiles/horner/bits.hpp"
 
 namespace stepnode::motion {
 
 // %I1..%I16 and %Q1..%Q16 as bits 0..15 of the status and command words (od/axis_bits.hpp).
-namespace status = od::axis_status;
-namespace command = od::axis_command;
+namespace status = horner::status;
+namespace command = horner::command;
 
 // %AQ1..%AQ14. Power-on values are a usable slow profile.
 struct CommandWords {

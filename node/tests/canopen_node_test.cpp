@@ -31,6 +31,8 @@ class NodeTest : public ::testing::Test {
     o.device.node_id = 5;
     o.state_dir = dir;
     node = std::make_unique<CanopenNode>(o, [this](const CanFrame& f) { sent.push_back(f); });
+    // The stepnode's object tables with nothing behind them: the slave's rules alone.
+    add_profile_objects(node->dictionary(), o.layout);
     node->start(t);
   }
   void nmt(uint8_t cs, uint8_t id = 5) { frame(CanFrame(0, {cs, id})); }
@@ -294,7 +296,7 @@ TEST(NodeConfig, BadCommandLinesAreOneLineUsageErrors) {
   EXPECT_EQ(cfg.options.device.node_id, 9);
   ASSERT_EQ(cfg.object_defaults.size(), 1u);
   od::Dictionary d;
-  od::build_device_dictionary(d, cfg.options.device);
+  build_device_objects(d, cfg.options.device, cfg.options.layout);
   apply_object_defaults(d, cfg.object_defaults);
   EXPECT_EQ(d.get<uint16_t>(0x1017, 0), 250);
   EXPECT_THROW(apply_object_defaults(d, {{"1000", "1"}}), UsageError);  // read-only

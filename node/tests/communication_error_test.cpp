@@ -10,16 +10,17 @@
 #include <cstdint>
 #include <vector>
 
+#include "node/diagnostic_objects.hpp"
 #include "node/tests/node_harness.hpp"
-#include "od/axis_bits.hpp"
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/bits.hpp"
+#include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::node::test {
 namespace {
 
-namespace axis_obj = od::axis_obj;
-namespace cmd = od::axis_command;
-namespace st = od::axis_status;
+namespace axis_obj = horner::obj;
+namespace cmd = horner::command;
+namespace st = horner::status;
 
 constexpr uint8_t kMaster = 0x20, kOther = 0x21;
 constexpr uint32_t kValueTooHigh = 0x06090031;
@@ -34,7 +35,7 @@ class CommunicationErrors : public NodeHarness {
     for (unsigned a = 0; a < 2; ++a) {
       command(a, cmd::kClearErrors);
       uint16_t p = axis_obj::index(a, axis_obj::kProfile);
-      ASSERT_EQ(sdo_write(p, od::profile_sub::kDeceleration, 400, 2), 0u);  // %AQ7: 400 ms
+      ASSERT_EQ(sdo_write(p, horner::profile_sub::kDeceleration, 400, 2), 0u);  // %AQ7: 400 ms
     }
     nmt(0x01);
     beat(kMaster);
@@ -114,7 +115,7 @@ TEST_F(CommunicationErrors, TheLostMasterRampsEveryAxisDownAndLatchesI8InVirtual
 
 TEST_F(CommunicationErrors, OnlyTheConfiguredMasterStopsTheAxes) {
   ASSERT_EQ(sdo_write(0x1029, 1, 1, 1), 0u);
-  ASSERT_EQ(sdo_write(od::kMasterNodeId, 0, kMaster, 1), 0u);
+  ASSERT_EQ(sdo_write(kMasterNodeId, 0, kMaster, 1), 0u);
   jog(0);
   beating({kMaster, kOther}, 1000);
   size_t from = sent.size();
@@ -133,7 +134,7 @@ TEST_F(CommunicationErrors, AnyMonitoredNodeIsTheMasterWhen2F11IsZero) {
   beating({kMaster, kOther}, 1000);
   beating({kMaster}, 500);
   EXPECT_NE(status(0) & st::kPowerUp, 0);
-  EXPECT_EQ(od().get<uint8_t>(od::kMasterNodeId, 0), 0);
+  EXPECT_EQ(od().get<uint8_t>(kMasterNodeId, 0), 0);
 }
 
 TEST_F(CommunicationErrors, Behaviour0TakesAnOperationalNodeToPreOperational) {
@@ -211,14 +212,14 @@ TEST_F(CommunicationErrors, NmtStoppedRampsTheAxesDownPreOperationalDoesNot) {
 TEST_F(CommunicationErrors, ValuesOutsideTheStandardsAreRefusedAndBothAreStored) {
   EXPECT_EQ(sdo_write(0x1029, 1, 3, 1), kValueTooHigh);  // 3..0x7F reserved
   EXPECT_EQ(sdo_write(0x1029, 1, 0x80, 1), kValueTooHigh);  // no manufacturer values here
-  EXPECT_EQ(sdo_write(od::kMasterNodeId, 0, 128, 1), kValueTooHigh);
+  EXPECT_EQ(sdo_write(kMasterNodeId, 0, 128, 1), kValueTooHigh);
   EXPECT_EQ(*sdo_read(0x1029, 0), 1u);  // highest sub-index
   ASSERT_EQ(sdo_write(0x1029, 1, 2, 1), 0u);
-  ASSERT_EQ(sdo_write(od::kMasterNodeId, 0, kMaster, 1), 0u);
+  ASSERT_EQ(sdo_write(kMasterNodeId, 0, kMaster, 1), 0u);
   ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173), 0u);  // "save"
   make(2);  // a restart
   EXPECT_EQ(od().get<uint8_t>(0x1029, 1), 2);
-  EXPECT_EQ(od().get<uint8_t>(od::kMasterNodeId, 0), kMaster);
+  EXPECT_EQ(od().get<uint8_t>(kMasterNodeId, 0), kMaster);
 }
 
 }  // namespace

@@ -137,7 +137,7 @@ TEST_F(ConfigTest, FileValuesAndCommandLineWins) {
   NodeConfig cfg = parse({"--config", path});
   EXPECT_EQ(cfg.iface, "can0");
   EXPECT_EQ(cfg.options.device.node_id, 9);
-  EXPECT_EQ(cfg.options.device.axes, 2u);
+  EXPECT_EQ(cfg.options.layout.axes, 2u);
   EXPECT_EQ(cfg.tick_us, 500u);
   EXPECT_EQ(cfg.options.state_dir, "/tmp/x");
   cfg = parse({"--config", path, "--iface", "vcan3", "--node-id", "7"});
@@ -156,7 +156,7 @@ TEST_F(ConfigTest, DefaultsTableSetsObjectDefaults) {
       "node_id = 5\n[defaults]\n\"1017\" = 250\n\"1016:1\" = 0x00200064\n\"2F00:2\" = 7\n");
   NodeConfig cfg = parse({"--iface", "vcan0", "--config", path});
   ASSERT_EQ(cfg.object_defaults.size(), 3u);
-  cfg.options.device.axes = 1;
+  cfg.options.layout.axes = 1;
   cfg.options.state_dir = dir.path;
   std::vector<CanFrame> sent;
   Device device(cfg.options, cfg.object_defaults, [&](const CanFrame& f) { sent.push_back(f); });
@@ -181,9 +181,7 @@ TEST_F(ConfigTest, DefaultsTableSetsObjectDefaults) {
 
 TEST_F(ConfigTest, BadDefaultsNameTheObject) {
   od::Dictionary d;
-  od::DeviceInfo info;
-  info.axes = 1;
-  od::build_device_dictionary(d, info);
+  build_device_objects(d, od::DeviceInfo{}, DeviceLayout{.axes = 1});
   auto error_of_defaults = [&](std::string key, std::string value) {
     try {
       apply_object_defaults(d, {{key, value}});

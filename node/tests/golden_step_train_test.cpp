@@ -16,9 +16,10 @@
 #include <vector>
 
 #include "node/tests/node_harness.hpp"
-#include "od/axis_bits.hpp"
-#include "od/axis_objects.hpp"
-#include "od/hp_objects.hpp"
+#include "node/profiles/horner/bits.hpp"
+#include "node/profiles/horner/objects.hpp"
+#include "node/profiles/sim/objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 
 #ifndef STEPNODE_GOLDEN_DIR
 #error "STEPNODE_GOLDEN_DIR: the directory of the recorded trains"
@@ -27,9 +28,9 @@
 namespace stepnode::node::test {
 namespace {
 
-namespace axis_obj = od::axis_obj;
-namespace hp_obj = od::hp_obj;
-namespace cmd = od::axis_command;
+namespace axis_obj = horner::obj;
+namespace hp_obj = hp44714a::obj;
+namespace cmd = horner::command;
 using Train = std::vector<sim::TracedStep>;
 
 std::string golden_path(const std::string& name) { return std::string(STEPNODE_GOLDEN_DIR) + "/" + name + ".train"; }
@@ -111,12 +112,12 @@ class GoldenTrains : public NodeHarness {
   // HP: PROFILE mode min max slope last.
   void hp_profile(uint8_t mode, double min, double max, double slope, double last) {
     uint16_t p = hp_obj::index(0, hp_obj::kProfile);
-    ASSERT_EQ(put_int<uint8_t>(p, od::hp_profile_sub::kMode, mode), 0u);
-    ASSERT_EQ(put(p, od::hp_profile_sub::kMin, min), 0u);
-    ASSERT_EQ(put(p, od::hp_profile_sub::kMax, max), 0u);
-    ASSERT_EQ(put(p, od::hp_profile_sub::kSlope, slope), 0u);
-    ASSERT_EQ(put(p, od::hp_profile_sub::kLast, last), 0u);
-    ASSERT_EQ(put_int<uint8_t>(p, od::hp_profile_sub::kApply, 1), 0u);
+    ASSERT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kMode, mode), 0u);
+    ASSERT_EQ(put(p, hp44714a::profile_sub::kMin, min), 0u);
+    ASSERT_EQ(put(p, hp44714a::profile_sub::kMax, max), 0u);
+    ASSERT_EQ(put(p, hp44714a::profile_sub::kSlope, slope), 0u);
+    ASSERT_EQ(put(p, hp44714a::profile_sub::kLast, last), 0u);
+    ASSERT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kApply, 1), 0u);
   }
   void hp_sustain(double v) { ASSERT_EQ(put(hp_obj::index(0, hp_obj::kSustain), 0, v), 0u); }
 
@@ -125,7 +126,7 @@ class GoldenTrains : public NodeHarness {
 
 TEST_F(GoldenTrains, HornerTrapezoid) {
   command(cmd::kClearErrors);
-  profile_word(od::profile_sub::kDeceleration, 300);
+  profile_word(horner::profile_sub::kDeceleration, 300);
   destination(0);
   command(cmd::kSetPosition);  // MOVE ABSOLUTE needs a valid position (SPM30 3.3.1)
   destination(3000);
@@ -140,7 +141,7 @@ TEST_F(GoldenTrains, HornerTrapezoid) {
 
 TEST_F(GoldenTrains, HornerTriangle) {
   command(cmd::kClearErrors);
-  profile_word(od::profile_sub::kAcceleration, 800);
+  profile_word(horner::profile_sub::kAcceleration, 800);
   destination(250);
   command(cmd::kMoveRelative);
   advance_ms(3000);
@@ -161,15 +162,15 @@ TEST_F(GoldenTrains, HornerJog) {
 }
 
 TEST_F(GoldenTrains, HornerIndexedMove) {
-  uint16_t sw = od::sim_obj::index(0, od::sim_obj::kSwitches);
-  ASSERT_EQ(sdo_write(sw, od::switches_sub::kIndexPosition, 1800), 0u);
-  ASSERT_EQ(sdo_write(sw, od::switches_sub::kIndexWidth, 10), 0u);
+  uint16_t sw = sim::obj::index(0, sim::obj::kSwitches);
+  ASSERT_EQ(sdo_write(sw, sim::switches_sub::kIndexPosition, 1800), 0u);
+  ASSERT_EQ(sdo_write(sw, sim::switches_sub::kIndexWidth, 10), 0u);
   command(cmd::kClearErrors);
   uint16_t ix = axis_obj::index(0, axis_obj::kIndexedMove);
-  ASSERT_EQ(sdo_write(ix, od::indexed_sub::kDestination, 400), 0u);
-  ASSERT_EQ(sdo_write(ix, od::indexed_sub::kDeceleration, 250, 2), 0u);
-  ASSERT_EQ(sdo_write(ix, od::indexed_sub::kWindowOpen, 1000), 0u);
-  ASSERT_EQ(sdo_write(ix, od::indexed_sub::kWindowClose, 6000), 0u);
+  ASSERT_EQ(sdo_write(ix, horner::indexed_sub::kDestination, 400), 0u);
+  ASSERT_EQ(sdo_write(ix, horner::indexed_sub::kDeceleration, 250, 2), 0u);
+  ASSERT_EQ(sdo_write(ix, horner::indexed_sub::kWindowOpen, 1000), 0u);
+  ASSERT_EQ(sdo_write(ix, horner::indexed_sub::kWindowClose, 6000), 0u);
   destination(8000);
   command(cmd::kMoveIndexed);
   advance_ms(6000);
@@ -193,16 +194,16 @@ TEST_F(GoldenTrains, HpFrequencyRampMoves) {
   // HP manual Figure 3-3: PROFILE FREQ 100 800 200 25E-6, PSCALE 0.1, MOVE 20, MOVE -30.
   hp_profile(0, 100, 800, 200, 25e-6);
   ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), od::hp_move_sub::kRelative, 20), 0u);
+  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
   advance_ms(3000);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), od::hp_move_sub::kRelative, -30), 0u);
+  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, -30), 0u);
   advance_ms(4000);
   check("hp_freq_move");
 }
 
 TEST_F(GoldenTrains, HpSustainChanges) {
   hp_profile(0, 100, 2000, 1000, 25e-6);
-  ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), od::hp_move_sub::kNowait, 1), 0u);
+  ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kNowait, 1), 0u);
   hp_sustain(1500);
   advance_ms(2500);
   hp_sustain(300);
@@ -219,7 +220,7 @@ TEST_F(GoldenTrains, HpSustainChanges) {
 TEST_F(GoldenTrains, HpWidthMode) {
   // HP manual 3-28: PROFILE WIDTH 1E-3 10E-3 5E-3 20E-3, SUSTAIN 2E-3, then SUSTAIN 0.
   hp_profile(1, 1e-3, 10e-3, 5e-3, 20e-3);
-  ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), od::hp_move_sub::kNowait, 1), 0u);
+  ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kNowait, 1), 0u);
   hp_sustain(2e-3);
   advance_ms(1300);
   hp_sustain(0);

@@ -9,12 +9,12 @@
 #include <memory>
 
 #include "node/tests/node_harness.hpp"
-#include "od/hp_objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 
 namespace stepnode::node::test {
 namespace {
 
-using namespace od::hp_obj;
+using namespace hp44714a::obj;
 
 class HpBus : public NodeHarness {
  protected:
@@ -33,19 +33,19 @@ class HpBus : public NodeHarness {
   // The manual's words as object writes.
   uint32_t profile(uint8_t mode, double min, double max, double slope, double last, unsigned a = 0) {
     uint16_t p = index(a, kProfile);
-    EXPECT_EQ(put_int<uint8_t>(p, od::hp_profile_sub::kMode, mode), 0u);
-    EXPECT_EQ(put(p, od::hp_profile_sub::kMin, min), 0u);
-    EXPECT_EQ(put(p, od::hp_profile_sub::kMax, max), 0u);
-    EXPECT_EQ(put(p, od::hp_profile_sub::kSlope, slope), 0u);
-    EXPECT_EQ(put(p, od::hp_profile_sub::kLast, last), 0u);
-    return put_int<uint8_t>(p, od::hp_profile_sub::kApply, 1);
+    EXPECT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kMode, mode), 0u);
+    EXPECT_EQ(put(p, hp44714a::profile_sub::kMin, min), 0u);
+    EXPECT_EQ(put(p, hp44714a::profile_sub::kMax, max), 0u);
+    EXPECT_EQ(put(p, hp44714a::profile_sub::kSlope, slope), 0u);
+    EXPECT_EQ(put(p, hp44714a::profile_sub::kLast, last), 0u);
+    return put_int<uint8_t>(p, hp44714a::profile_sub::kApply, 1);
   }
   uint32_t move(double d, bool abs = false, bool nowait = false, unsigned a = 0) {
-    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait, nowait ? 1 : 0), 0u);
-    return put(index(a, kMove), abs ? od::hp_move_sub::kAbsolute : od::hp_move_sub::kRelative, d);
+    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait, nowait ? 1 : 0), 0u);
+    return put(index(a, kMove), abs ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative, d);
   }
   uint32_t sustain(double v, bool nowait = false, unsigned a = 0) {
-    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), od::hp_move_sub::kNowait, nowait ? 1 : 0), 0u);
+    EXPECT_EQ(put_int<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait, nowait ? 1 : 0), 0u);
     return put(index(a, kSustain), 0, v);
   }
   uint32_t trig(uint8_t mode, unsigned a = 0) { return sdo_write(index(a, kTrig), 0, mode, 1); }
@@ -60,18 +60,18 @@ constexpr uint32_t kTpdo4 = 0x480 + 5;
 TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
   // 30 STANDBY AUTO LO / 40 PULSE SS HI HI / 50 PROFILE FREQ 100 800 200 25E-6 / 60 PSCALE 0.1
   uint16_t out = index(0, kOutput);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 2, 1), 0u);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbySense, 0, 1), 0u);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kPulseMode, 1, 1), 0u);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kPstpSense, 1, 1), 0u);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kNdirSense, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbyMode, 2, 1), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbySense, 0, 1), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kPulseMode, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kPstpSense, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kNdirSense, 1, 1), 0u);
   ASSERT_EQ(profile(0, 100, 800, 200, 25e-6), 0u);
   ASSERT_EQ(put(index(0, kPscale), 0, 0.1), 0u);
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 0u);  // LO sense: low = power removed
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 0u);  // LO sense: low = power removed
 
   // 70 MOVE 20 (auto triggered): 200 pulses; 90 MOVE -30: 300 pulses back.
   ASSERT_EQ(move(20), 0u);
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 1u);  // motor power on
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 1u);  // motor power on
   wait_s(3);
   EXPECT_EQ(done(), 0);
   EXPECT_EQ(mechanical(), 200);
@@ -81,8 +81,8 @@ TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
   EXPECT_EQ(mechanical(), -100);
   EXPECT_NEAR(get(index(0, kPosition)), -10.0, 1e-9);
   // SS mode: the negative pulses went to NDIR.
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kPstpPulses), 200u);
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kNdirPulses), 300u);
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kPstpPulses), 200u);
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kNdirPulses), 300u);
 
   // 70 DELAY 5 / 80 TRIG HOLD / 90 MOVE 20 NOWAIT / 100 TRIG
   ASSERT_EQ(sdo_write(index(0, kDelay), 0, 5000, 2), 0u);
@@ -98,7 +98,7 @@ TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
   EXPECT_EQ(mechanical(), -100);
   wait_s(3);
   EXPECT_EQ(mechanical(), 100);
-  EXPECT_EQ(static_cast<int32_t>(*sdo_read(index(0, kTiming), od::hp_timing_sub::kFirstStepAfterTriggerUs)) / 1000,
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(index(0, kTiming), hp44714a::timing_sub::kFirstStepAfterTriggerUs)) / 1000,
             5000 + 10 - 1);  // DELAY 5 s, then the first pulse at 100 Hz rising (just under 10 ms)
   // 120 MOVE -30 NOWAIT / 130 TRIG / 150 TRIG AUTO
   ASSERT_EQ(move(-30, false, true), 0u);
@@ -133,12 +133,12 @@ TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
   wait_s(10);
   EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2007, 0)), -100);
   // 240 HALT SGL
-  ASSERT_EQ(sdo_write(index(0, kLimits), od::hp_limits_sub::kHaltSgl, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kLimits), hp44714a::limits_sub::kHaltSgl, 1, 1), 0u);
   EXPECT_EQ(done(), 1);
   int32_t stopped = mechanical();
   wait_s(2);
   EXPECT_EQ(mechanical(), stopped);
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kStbyLevel), 0u);  // AUTO: power off 1 s later
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 0u);  // AUTO: power off 1 s later
 }
 
 TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
@@ -146,7 +146,7 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
   // / HALT SGL; the service routine re-enables (the master writes 0x201D:1 again).
   ASSERT_EQ(profile(0, 0, 1200, 250, 50e-6), 0u);
   uint16_t in = index(0, kInterrupt);
-  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(in, hp44714a::intr_sub::kEnable, 1, 1), 0u);
   size_t from = sent.size();
   ASSERT_EQ(move(100, false, true), 0u);
   wait_s(5);
@@ -155,8 +155,8 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
   EXPECT_EQ(tpdos.back().dlc, 3);
   EXPECT_EQ(tpdos.back().data[0], 0);  // DONE? 0
   EXPECT_EQ(tpdos.back().data[2], 1);  // event: pulses stopped after a MOVE
-  EXPECT_EQ(*sdo_read(in, od::hp_intr_sub::kEnable), 0u);  // disabled once sent
-  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  EXPECT_EQ(*sdo_read(in, hp44714a::intr_sub::kEnable), 0u);  // disabled once sent
+  ASSERT_EQ(sdo_write(in, hp44714a::intr_sub::kEnable, 1, 1), 0u);
   from = sent.size();
   uint64_t sustain_at = t;
   ASSERT_EQ(sustain(1000, true), 0u);
@@ -171,9 +171,9 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
       EXPECT_NEAR(static_cast<double>(times[i] - sustain_at) / 1e6, 4.0, 0.01);  // 1000 Hz / 250 Hz/s
     }
   EXPECT_TRUE(reached);
-  ASSERT_EQ(sdo_write(in, od::hp_intr_sub::kEnable, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(in, hp44714a::intr_sub::kEnable, 1, 1), 0u);
   from = sent.size();
-  ASSERT_EQ(sdo_write(index(0, kLimits), od::hp_limits_sub::kHaltSgl, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kLimits), hp44714a::limits_sub::kHaltSgl, 1, 1), 0u);
   tpdos = with_id(kTpdo4, from);
   ASSERT_FALSE(tpdos.empty());
   EXPECT_EQ(tpdos.back().data[0], 1);
@@ -257,17 +257,17 @@ TEST_F(HpBus, ProfileConflictsAndErrorNumbersAreAborts) {
   ASSERT_EQ(profile(0, 0, 250, 500, 50e-6), 0u);
   // 94: STANDBY ON.
   size_t from = sent.size();
-  ASSERT_EQ(sdo_write(index(0, kOutput), od::hp_output_sub::kStandbyMode, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kOutput), hp44714a::output_sub::kStandbyMode, 1, 1), 0u);
   EXPECT_EQ(move(10), kDeviceState);
   EXPECT_EQ(error(), 94);
   ASSERT_EQ(emcys(from).size(), 1u);
   EXPECT_EQ(emcy_code(emcys(from)[0]), 0xFF5E);
-  ASSERT_EQ(sdo_write(index(0, kOutput), od::hp_output_sub::kStandbyMode, 2, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kOutput), hp44714a::output_sub::kStandbyMode, 2, 1), 0u);
   // 93: the simulated TEST jumper.
-  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kTestJumper, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(sim_index(0), hp44714a::sim_sub::kTestJumper, 1, 1), 0u);
   EXPECT_EQ(move(10), kDeviceState);
   EXPECT_EQ(error(), 93);
-  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kTestJumper, 0, 1), 0u);
+  ASSERT_EQ(sdo_write(sim_index(0), hp44714a::sim_sub::kTestJumper, 0, 1), 0u);
   // 90: TRIG SGL with nothing armed. 89: a MOVE while one runs.
   ASSERT_EQ(trig(0), 0u);
   EXPECT_EQ(trig(2), kDeviceState);
@@ -280,16 +280,16 @@ TEST_F(HpBus, ProfileConflictsAndErrorNumbersAreAborts) {
 }
 
 TEST_F(HpBus, HaltSwitchAndHardLimitOverTheBus) {
-  ASSERT_EQ(sdo_write(index(0, kInterrupt), od::hp_intr_sub::kEnable, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kInterrupt), hp44714a::intr_sub::kEnable, 1, 1), 0u);
   ASSERT_EQ(sustain(200, true), 0u);
   wait_s(1);
-  ASSERT_EQ(sdo_write(index(0, kInterrupt), od::hp_intr_sub::kEnable, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(index(0, kInterrupt), hp44714a::intr_sub::kEnable, 1, 1), 0u);
   size_t from = sent.size();
-  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kHaltInputHigh, 0, 1), 0u);  // switch closes
+  ASSERT_EQ(sdo_write(sim_index(0), hp44714a::sim_sub::kHaltInputHigh, 0, 1), 0u);  // switch closes
   EXPECT_EQ(done(), 1);
   ASSERT_EQ(emcys(from).size(), 1u);
   EXPECT_EQ(emcy_code(emcys(from)[0]), 0xFF45);
-  ASSERT_EQ(sdo_write(sim_index(0), od::hp_sim_sub::kHaltInputHigh, 1, 1), 0u);
+  ASSERT_EQ(sdo_write(sim_index(0), hp44714a::sim_sub::kHaltInputHigh, 1, 1), 0u);
   // The simulated upper limit (0x5000:6) at 300 steps.
   ASSERT_EQ(sdo_write(0x5000, 6, 300), 0u);
   ASSERT_EQ(move(1000, false, true), 0u);
@@ -314,8 +314,8 @@ TEST_F(HpBus, TrigSysStartsTwoAxesOnOneSync) {
   for (unsigned a = 0; a < 2; ++a) {
     EXPECT_EQ(done(a), 0);
     EXPECT_EQ(mechanical(a), 50);
-    first[a] = *sdo_read(index(a, kTiming), od::hp_timing_sub::kFirstStepUs);
-    EXPECT_EQ(*sdo_read(index(a, kTiming), od::hp_timing_sub::kTriggerUs), static_cast<uint32_t>(sync_at));
+    first[a] = *sdo_read(index(a, kTiming), hp44714a::timing_sub::kFirstStepUs);
+    EXPECT_EQ(*sdo_read(index(a, kTiming), hp44714a::timing_sub::kTriggerUs), static_cast<uint32_t>(sync_at));
   }
   EXPECT_EQ(first[0], first[1]);
   // The power-on profile starts from 0 Hz at 500 Hz/s: the first step 63.2 ms after SYNC.
@@ -327,7 +327,7 @@ TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
   ASSERT_EQ(move(5, false, true), 0u);
   advance_us(3'000);
   device->on_frame(CanFrame(0x80, {}), t, t - 700);  // it reached the socket 700 us before it was read
-  EXPECT_EQ(*sdo_read(index(0, kTiming), od::hp_timing_sub::kTriggerUs), static_cast<uint32_t>(t - 700));
+  EXPECT_EQ(*sdo_read(index(0, kTiming), hp44714a::timing_sub::kTriggerUs), static_cast<uint32_t>(t - 700));
   wait_s(1);
   EXPECT_EQ(mechanical(), 5);
 }
@@ -366,8 +366,8 @@ TEST_F(HpBus, AStoredProfileTheChannelRefusesIsReportedAndTheObjectsShowThePower
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0].data[3], static_cast<uint8_t>(p));
   EXPECT_EQ(e[0].data[4], static_cast<uint8_t>(p >> 8));
-  EXPECT_EQ(get(p, od::hp_profile_sub::kMin), 0.0);  // power-on: 0 250 500 50E-6
-  EXPECT_EQ(get(p, od::hp_profile_sub::kMax), 250.0);
+  EXPECT_EQ(get(p, hp44714a::profile_sub::kMin), 0.0);  // power-on: 0 250 500 50E-6
+  EXPECT_EQ(get(p, hp44714a::profile_sub::kMax), 250.0);
 }
 
 TEST_F(HpBus, Tpdo4IsMappedToDoneErrorAndEvent) {
@@ -396,19 +396,19 @@ TEST_F(HpBus, StandbyOnLeavesTheMotorUnpoweredSoHornerStepsMoveNothing) {
     wait_s(2);
   };
   ASSERT_EQ(sdo_write(0x2000, 0, 1u << 13, 2), 0u);  // %Q14 Clear Errors (power-up)
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 1, 1), 0u);  // STANDBY ON
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kMotorPowered), 0u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbyMode, 1, 1), 0u);  // STANDBY ON
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kMotorPowered), 0u);
   EXPECT_EQ(move(1), kDeviceState);
   EXPECT_EQ(error(), 94);
   horner_move_rel(100);
   EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x2005, 0)), 100) << "the module counted its steps";
   EXPECT_EQ(mechanical(), 0) << "an unpowered motor does not move";
 
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 2, 1), 0u);  // AUTO
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbyMode, 2, 1), 0u);  // AUTO
   horner_move_rel(100);
   EXPECT_EQ(mechanical(), 100);
-  ASSERT_EQ(sdo_write(out, od::hp_output_sub::kStandbyMode, 0, 1), 0u);  // OFF: power applied
-  EXPECT_EQ(*sdo_read(out, od::hp_output_sub::kMotorPowered), 1u);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbyMode, 0, 1), 0u);  // OFF: power applied
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kMotorPowered), 1u);
   horner_move_rel(-50);
   EXPECT_EQ(mechanical(), 50);
 }

@@ -59,7 +59,7 @@ class NodeHarness : public ::testing::Test {
   void make(unsigned axes = 1, const Device::ObjectDefaults& defaults = {}) {
     NodeOptions o;
     o.device.node_id = kId;
-    o.device.axes = axes;
+    o.layout.axes = axes;
     o.state_dir = dir.path;
     make(o, defaults);
   }

@@ -224,7 +224,7 @@ TEST_F(StoreRestoreTest, AMissingStateDirectoryIsCreatedOnSave) {
   std::filesystem::path sub = dir.path / "a" / "b";
   NodeOptions o;
   o.device.node_id = kId;
-  o.device.axes = 1;
+  o.layout.axes = 1;
   o.state_dir = sub;
   make(o);
   EXPECT_EQ(node->state(), NmtState::PreOperational);

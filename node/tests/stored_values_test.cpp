@@ -52,8 +52,7 @@ TEST_F(StoredValues, AStoredMappingToAnAxisTheDeviceNoLongerHasKeepsTheDefaultAn
   od::Dictionary defaults;
   od::DeviceInfo info;
   info.node_id = kId;
-  info.axes = 1;
-  od::build_device_dictionary(defaults, info);
+  build_device_objects(defaults, info, DeviceLayout{.axes = 1});
   EXPECT_EQ(od().get<uint8_t>(0x1A00, 0), defaults.get<uint8_t>(0x1A00, 0));
   EXPECT_EQ(od().get<uint32_t>(0x1A00, 1), defaults.get<uint32_t>(0x1A00, 1));
   // EMCY 0x5530 (data storage), error register bit 0; manufacturer bytes: the first
@@ -205,9 +204,7 @@ TEST_F(StoredValues, AStaleTemporaryFileIsRemovedAtStart) {
 
 TEST(PdoMappingRecord, PackingAnEntryTheDictionaryLacksGivesZerosNotAThrow) {
   od::Dictionary d;
-  od::DeviceInfo info;
-  info.axes = 1;
-  od::build_device_dictionary(d, info);
+  build_device_objects(d, od::DeviceInfo{}, DeviceLayout{.axes = 1});
   od::PdoMapping m{od::MappedEntry::from_word(0x99990020), od::MappedEntry::from_word(0x10010008)};
   std::vector<uint8_t> data;
   EXPECT_NO_THROW(data = od::pack_pdo(d, m));

@@ -7,13 +7,13 @@
 #include <stdexcept>
 #include <thread>
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 #include "od/sdo_abort.hpp"
 
 namespace stepnode::tools {
 namespace {
 
-using namespace od::axis_obj;
+using namespace horner::obj;
 
 struct AxisAccess {
   MasterBus& bus;

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "node/profiles/hp44714a/objects.hpp"
 #include "od/emcy_text.hpp"
 #include "od/sdo_abort.hpp"
 #include "od/value_codec.hpp"
@@ -58,7 +59,9 @@ std::string FrameDecoder::describe(const od::CanFrame& f) const {
     uint8_t node = static_cast<uint8_t>(id - 0x80);
     if (f.dlc < 8) return fmt("EMCY node %u (malformed, DLC %u)", node, f.dlc);
     uint16_t code = od::get_u16(d);
-    return fmt("EMCY node %u: 0x%04X ", node, code) + od::emcy_code_text(code) +
+    // stepctl speaks to stepnodes: the HP channels' codes in the manual's words.
+    const char* hp = hp44714a::emcy_text(code);
+    return fmt("EMCY node %u: 0x%04X ", node, code) + (hp ? std::string(hp) : od::emcy_code_text(code)) +
            fmt("; error register 0x%02X (", d[2]) + od::error_register_text(d[2]) +
            "); manufacturer " + hex_bytes(d + 3, 5);
   }

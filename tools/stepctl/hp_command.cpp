@@ -5,7 +5,7 @@
 #include <iostream>
 #include <thread>
 
-#include "od/hp_objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 #include "od/sdo_abort.hpp"
 #include "tools/stepctl/hp_words.hpp"
 
@@ -19,10 +19,10 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
                  static_cast<uint32_t>(r.abort), std::string(od::abort_text(r.abort)).c_str());
     // Why, in the manual's words.
     if (r.abort == od::SdoAbort::DeviceState) {
-      od::SdoResult e = bus.upload(id, od::hp_obj::index(channel, od::hp_obj::kError), 0);
+      od::SdoResult e = bus.upload(id, hp44714a::obj::index(channel, hp44714a::obj::kError), 0);
       if (e.ok()) std::fprintf(stderr, "stepctl: ERROR %u \"%s\"\n", e.data.at(0), hp_error_text(e.data.at(0)).c_str());
     } else if (r.abort == od::SdoAbort::ParameterIncompatible) {
-      od::SdoResult e = bus.upload(id, od::hp_obj::index(channel, od::hp_obj::kConflict), 0);
+      od::SdoResult e = bus.upload(id, hp44714a::obj::index(channel, hp44714a::obj::kConflict), 0);
       if (e.ok()) std::fprintf(stderr, "stepctl: settings conflict: %s\n", hp_conflict_text(e.data.at(0)).c_str());
     }
     return 1;

@@ -7,12 +7,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "od/hp_objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 
 namespace stepnode::tools {
 namespace {
 
-using namespace od::hp_obj;
+using namespace hp44714a::obj;
 
 std::string upper(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
@@ -79,9 +79,9 @@ struct Planner {
     if (c == "PROFILE") {
       need(5, 5);
       if (w[1] != "FREQ" && w[1] != "WIDTH") throw std::invalid_argument("PROFILE: mode must be FREQ or WIDTH");
-      u8(kProfile, od::hp_profile_sub::kMode, w[1] == "WIDTH" ? 1 : 0);
-      for (uint8_t k = 0; k < 4; ++k) real(kProfile, static_cast<uint8_t>(od::hp_profile_sub::kMin + k), number(c, w[2 + k]));
-      u8(kProfile, od::hp_profile_sub::kApply, 1);
+      u8(kProfile, hp44714a::profile_sub::kMode, w[1] == "WIDTH" ? 1 : 0);
+      for (uint8_t k = 0; k < 4; ++k) real(kProfile, static_cast<uint8_t>(hp44714a::profile_sub::kMin + k), number(c, w[2 + k]));
+      u8(kProfile, hp44714a::profile_sub::kApply, 1);
     } else if (c == "PSCALE") {
       need(1, 1);
       double s = number(c, w[1]);
@@ -96,8 +96,8 @@ struct Planner {
         else if (c == "MOVE" && (w[k] == "ABS" || w[k] == "REL")) absolute = w[k] == "ABS";
         else throw std::invalid_argument(c + ": unknown option '" + w[k] + "'");
       }
-      u8(kMove, od::hp_move_sub::kNowait, nowait ? 1 : 0);
-      if (c == "MOVE") real(kMove, absolute ? od::hp_move_sub::kAbsolute : od::hp_move_sub::kRelative, v);
+      u8(kMove, hp44714a::move_sub::kNowait, nowait ? 1 : 0);
+      if (c == "MOVE") real(kMove, absolute ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative, v);
       else real(kSustain, 0, v);
       if (!nowait) wait_running();  // without NOWAIT the command completes first (3-12)
     } else if (c == "TRIG") {
@@ -119,27 +119,27 @@ struct Planner {
       uint8_t mode = 1;
       size_t k = 1;
       if (w.size() > k && modes.count(w[k])) mode = modes.at(w[k++]);
-      if (w.size() > k) u8(kOutput, od::hp_output_sub::kStandbySense, sense(c, w[k++]));
+      if (w.size() > k) u8(kOutput, hp44714a::output_sub::kStandbySense, sense(c, w[k++]));
       if (w.size() > k) throw std::invalid_argument("STANDBY: unknown word '" + w[k] + "'");
-      u8(kOutput, od::hp_output_sub::kStandbyMode, mode);
+      u8(kOutput, hp44714a::output_sub::kStandbyMode, mode);
     } else if (c == "PULSE") {
       need(2, 3);
       if (w[1] != "SD" && w[1] != "SS") throw std::invalid_argument("PULSE: mode must be SD or SS");
       uint8_t p = sense(c, w[2]);
       uint8_t n = w.size() > 3 ? sense(c, w[3]) : p;  // NDIR defaults to PSTP's sense
-      u8(kOutput, od::hp_output_sub::kPstpSense, p);
-      u8(kOutput, od::hp_output_sub::kNdirSense, n);
-      u8(kOutput, od::hp_output_sub::kPulseMode, w[1] == "SS" ? 1 : 0);
+      u8(kOutput, hp44714a::output_sub::kPstpSense, p);
+      u8(kOutput, hp44714a::output_sub::kNdirSense, n);
+      u8(kOutput, hp44714a::output_sub::kPulseMode, w[1] == "SS" ? 1 : 0);
     } else if (c == "HARDLIM") {
       need(1, 2);
       uint8_t p = sense(c, w[1]);
-      u8(kLimits, od::hp_limits_sub::kPlimSense, p);
-      u8(kLimits, od::hp_limits_sub::kNlimSense, w.size() > 2 ? sense(c, w[2]) : p);
+      u8(kLimits, hp44714a::limits_sub::kPlimSense, p);
+      u8(kLimits, hp44714a::limits_sub::kNlimSense, w.size() > 2 ? sense(c, w[2]) : p);
     } else if (c == "HALT") {
       need(1, 1);
-      if (w[1] == "SGL") u8(kLimits, od::hp_limits_sub::kHaltSgl, 1);
-      else if (w[1] == "OFF") u8(kLimits, od::hp_limits_sub::kHaltMode, 2);
-      else u8(kLimits, od::hp_limits_sub::kHaltMode, sense(c, w[1]));
+      if (w[1] == "SGL") u8(kLimits, hp44714a::limits_sub::kHaltSgl, 1);
+      else if (w[1] == "OFF") u8(kLimits, hp44714a::limits_sub::kHaltMode, 2);
+      else u8(kLimits, hp44714a::limits_sub::kHaltMode, sense(c, w[1]));
     } else if (c == "POS") {
       need(1, 1);
       real(kPosition, 0, number(c, w[1]));
@@ -154,19 +154,19 @@ struct Planner {
       read(kError, 0, od::DataType::Unsigned8, "ERROR?");
     } else if (c == "QSCALE") {
       need(1, 1);
-      real(kQuadrature, od::hp_quad_sub::kQscale, number(c, w[1]));
+      real(kQuadrature, hp44714a::quad_sub::kQscale, number(c, w[1]));
     } else if (c == "QINDEX") {
       need(0, 1);
       static const std::map<std::string, uint8_t> modes = {{"OFF", 0}, {"ONCE", 1}, {"SGL", 2}};
       std::string m = w.size() > 1 ? w[1] : "SGL";
       if (!modes.count(m)) throw std::invalid_argument("QINDEX: mode must be OFF, ONCE or SGL");
-      u8(kQuadrature, od::hp_quad_sub::kQindex, modes.at(m));
+      u8(kQuadrature, hp44714a::quad_sub::kQindex, modes.at(m));
     } else if (c == "QPOS?") {
       need(0, 0);
-      read(kQuadrature, od::hp_quad_sub::kQpos, od::DataType::Real64, "QPOS?");
+      read(kQuadrature, hp44714a::quad_sub::kQpos, od::DataType::Real64, "QPOS?");
     } else if (c == "ENABLE" || c == "DISABLE") {
       if (w.size() != 2 || w[1] != "INTR") throw std::invalid_argument(c + ": only " + c + " INTR");
-      u8(kInterrupt, od::hp_intr_sub::kEnable, c == "ENABLE" ? 1 : 0);
+      u8(kInterrupt, hp44714a::intr_sub::kEnable, c == "ENABLE" ? 1 : 0);
     } else {
       throw std::invalid_argument("'" + c + "' is not an HP 44714A command");
     }

@@ -5,7 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "od/device_dictionary.hpp"
+#include "node/device_objects.hpp"
+#include "od/communication_objects.hpp"
 #include "od/eds.hpp"
 
 namespace stepnode::tools {
@@ -13,9 +14,8 @@ namespace stepnode::tools {
 ObjectCatalog::ObjectCatalog(const std::string& eds_path) {
   if (eds_path.empty()) {
     od::Dictionary dictionary;
-    od::DeviceInfo info;
-    info.axes = od::kMaxAxes;
-    od::build_device_dictionary(dictionary, info);
+    // Every object a stepnode can have: all profiles, the most axes.
+    node::build_device_objects(dictionary, od::DeviceInfo{}, node::DeviceLayout{.axes = node::kMaxAxes});
     for (const auto& [index, obj] : dictionary.objects())
       for (const auto& [sub, e] : obj.entries) {
         std::string name = obj.code == od::ObjectCode::Var ? obj.name : obj.name + " / " + e.name;

@@ -1,5 +1,6 @@
 #include "fake_node.hpp"
 
+#include "node/device_objects.hpp"
 #include "od/sdo_protocol.hpp"
 
 namespace stepnode::bridge::test {
@@ -37,22 +38,21 @@ FakeNode::FakeNode(FakeNodeOptions options)
   }
   od::DeviceInfo info;
   info.node_id = options_.id;
-  info.axes = options_.axes;
   info.device_name = options_.name;
   info.serial_number = 4242;
-  od::build_device_dictionary(od_, info);
+  node::build_device_objects(od_, info, node::DeviceLayout{.axes = options_.axes});
   for (unsigned a = 0; a < options_.axes; ++a) {
-    // The device dictionary may have the HP objects already (od/hp_objects.hpp); the
+    // The device dictionary may have the HP objects already (node/profiles/hp44714a); the
     // values asked for here are set either way.
-    if (options_.pscale > 0 && od_.find(od::axis_obj::index(a, 0x11), 0))
-      od_.put<double>(od::axis_obj::index(a, 0x11), 0, options_.pscale);
+    if (options_.pscale > 0 && od_.find(horner::obj::index(a, 0x11), 0))
+      od_.put<double>(horner::obj::index(a, 0x11), 0, options_.pscale);
     else if (options_.pscale > 0)
-      od_.var(od::axis_obj::index(a, 0x11), "PSCALE", DataType::Real64, Access::ReadWrite,
+      od_.var(horner::obj::index(a, 0x11), "PSCALE", DataType::Real64, Access::ReadWrite,
               od::encode<double>(options_.pscale));
-    if (options_.hp_objects && !od_.find(od::axis_obj::index(a, 0x18), 0)) {
-      od_.var(od::axis_obj::index(a, 0x18), "DONE?", DataType::Integer8, Access::ReadOnly,
+    if (options_.hp_objects && !od_.find(horner::obj::index(a, 0x18), 0)) {
+      od_.var(horner::obj::index(a, 0x18), "DONE?", DataType::Integer8, Access::ReadOnly,
               od::encode<int8_t>(0), true);
-      od_.var(od::axis_obj::index(a, 0x19), "HP error", DataType::Unsigned8, Access::ReadOnly,
+      od_.var(horner::obj::index(a, 0x19), "HP error", DataType::Unsigned8, Access::ReadOnly,
               od::encode<uint8_t>(0), true);
     }
   }
@@ -95,17 +95,17 @@ od::CanFrame FakeNode::emcy(uint16_t code, uint8_t reg, std::array<uint8_t, 5> m
 }
 
 void FakeNode::set_status(unsigned axis, uint16_t bits) {
-  od_.put<uint16_t>(od::axis_obj::index(axis, od::axis_obj::kStatusBits), 0, bits);
+  od_.put<uint16_t>(horner::obj::index(axis, horner::obj::kStatusBits), 0, bits);
 }
 
 void FakeNode::set_position(unsigned axis, int32_t motor, int32_t encoder) {
-  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kMotorPosition), 0, motor);
-  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kEncoderPosition), 0, encoder);
+  od_.put<int32_t>(horner::obj::index(axis, horner::obj::kMotorPosition), 0, motor);
+  od_.put<int32_t>(horner::obj::index(axis, horner::obj::kEncoderPosition), 0, encoder);
 }
 
 void FakeNode::set_velocity(unsigned axis, int32_t velocity, uint8_t phase) {
-  od_.put<int32_t>(od::axis_obj::index(axis, od::axis_obj::kVelocity), 0, velocity);
-  od_.put<uint8_t>(od::axis_obj::index(axis, od::axis_obj::kMotionPhase), 0, phase);
+  od_.put<int32_t>(horner::obj::index(axis, horner::obj::kVelocity), 0, velocity);
+  od_.put<uint8_t>(horner::obj::index(axis, horner::obj::kMotionPhase), 0, phase);
 }
 
 }  // namespace stepnode::bridge::test

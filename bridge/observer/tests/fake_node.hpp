@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 #include "od/can_frame.hpp"
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 #include "od/dictionary.hpp"
 #include "od/pdo_mapping.hpp"
 #include "od/sdo_server.hpp"

@@ -4,13 +4,13 @@
 
 #include <stdexcept>
 
-#include "od/hp_objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 #include "tools/stepctl/hp_words.hpp"
 
 namespace stepnode::tools {
 namespace {
 
-using namespace od::hp_obj;
+using namespace hp44714a::obj;
 
 double real(const HpAccess& a) { return od::decode<double>(a.data); }
 
@@ -18,13 +18,13 @@ TEST(HpWords, ProfileFreqWritesTheFourValuesThenApplies) {
   auto p = plan_hp_words("PROFILE FREQ 100 800 200 25E-6", 0);
   ASSERT_EQ(p.size(), 6u);
   EXPECT_EQ(p[0].index, 0x2010);
-  EXPECT_EQ(p[0].sub, od::hp_profile_sub::kMode);
+  EXPECT_EQ(p[0].sub, hp44714a::profile_sub::kMode);
   EXPECT_EQ(p[0].data, od::Bytes{0});
   EXPECT_EQ(real(p[1]), 100);
   EXPECT_EQ(real(p[2]), 800);
   EXPECT_EQ(real(p[3]), 200);
   EXPECT_EQ(real(p[4]), 25e-6);
-  EXPECT_EQ(p[5].sub, od::hp_profile_sub::kApply);
+  EXPECT_EQ(p[5].sub, hp44714a::profile_sub::kApply);
   EXPECT_EQ(plan_hp_words("profile width 1e-3 10e-3 5e-3 20e-3", 2)[0].index, 0x2210);
   EXPECT_EQ(plan_hp_words("profile width 1e-3 10e-3 5e-3 20e-3", 2)[0].data, od::Bytes{1});
 }
@@ -33,15 +33,15 @@ TEST(HpWords, MoveAndSustainSetNowaitAndWaitWithoutIt) {
   auto p = plan_hp_words("MOVE -30", 1);
   ASSERT_EQ(p.size(), 3u);
   EXPECT_EQ(p[0].index, 0x2112);
-  EXPECT_EQ(p[0].sub, od::hp_move_sub::kNowait);
+  EXPECT_EQ(p[0].sub, hp44714a::move_sub::kNowait);
   EXPECT_EQ(p[0].data, od::Bytes{0});
-  EXPECT_EQ(p[1].sub, od::hp_move_sub::kRelative);
+  EXPECT_EQ(p[1].sub, hp44714a::move_sub::kRelative);
   EXPECT_EQ(real(p[1]), -30);
   EXPECT_EQ(p[2].kind, HpAccess::WaitWhileRunning);
   p = plan_hp_words("MOVE 3 ABS NOWAIT", 0);
   ASSERT_EQ(p.size(), 2u);
   EXPECT_EQ(p[0].data, od::Bytes{1});
-  EXPECT_EQ(p[1].sub, od::hp_move_sub::kAbsolute);
+  EXPECT_EQ(p[1].sub, hp44714a::move_sub::kAbsolute);
   p = plan_hp_words("SUSTAIN 10 NOWAIT", 0);
   ASSERT_EQ(p.size(), 2u);
   EXPECT_EQ(p[1].index, 0x2013);
@@ -54,11 +54,11 @@ TEST(HpWords, DefaultsOfTrigStandbyQindexAndSenses) {
   EXPECT_EQ(plan_hp_words("TRIG INT", 0)[0].data, od::Bytes{1});
   auto s = plan_hp_words("STANDBY", 0);  // no mode: ON, sense unchanged (3-6)
   ASSERT_EQ(s.size(), 1u);
-  EXPECT_EQ(s[0].sub, od::hp_output_sub::kStandbyMode);
+  EXPECT_EQ(s[0].sub, hp44714a::output_sub::kStandbyMode);
   EXPECT_EQ(s[0].data, od::Bytes{1});
   s = plan_hp_words("STANDBY AUTO LO", 0);
   ASSERT_EQ(s.size(), 2u);
-  EXPECT_EQ(s[0].sub, od::hp_output_sub::kStandbySense);
+  EXPECT_EQ(s[0].sub, hp44714a::output_sub::kStandbySense);
   EXPECT_EQ(s[0].data, od::Bytes{0});
   EXPECT_EQ(s[1].data, od::Bytes{2});
   auto q = plan_hp_words("QINDEX", 0);  // default SGL (3-21)
@@ -69,7 +69,7 @@ TEST(HpWords, DefaultsOfTrigStandbyQindexAndSenses) {
   EXPECT_EQ(pulse[1].data, od::Bytes{1});
   EXPECT_EQ(pulse[2].data, od::Bytes{0});
   EXPECT_EQ(plan_hp_words("DELAY 5", 0)[0].data, od::encode<uint16_t>(5000));
-  EXPECT_EQ(plan_hp_words("HALT SGL", 0)[0].sub, od::hp_limits_sub::kHaltSgl);
+  EXPECT_EQ(plan_hp_words("HALT SGL", 0)[0].sub, hp44714a::limits_sub::kHaltSgl);
   EXPECT_EQ(plan_hp_words("HALT OFF", 0)[0].data, od::Bytes{2});
 }
 
@@ -79,7 +79,7 @@ TEST(HpWords, QueriesReadAndSeveralCommandsInOneString) {
   EXPECT_EQ(p.back().kind, HpAccess::Read);
   EXPECT_EQ(p.back().index, 0x201B);
   EXPECT_EQ(plan_hp_words("DONE?", 0)[0].index, 0x2018);
-  EXPECT_EQ(plan_hp_words("QPOS?", 0)[0].sub, od::hp_quad_sub::kQpos);
+  EXPECT_EQ(plan_hp_words("QPOS?", 0)[0].sub, hp44714a::quad_sub::kQpos);
   EXPECT_EQ(plan_hp_words("ENABLE INTR", 0)[0].data, od::Bytes{1});
   EXPECT_EQ(plan_hp_words("DISABLE INTR", 0)[0].data, od::Bytes{0});
 }

@@ -1,21 +1,25 @@
-#include "od/axis_objects.hpp"
+#include "node/profiles/horner/objects.hpp"
 
 #include <string>
 
-#include "od/can_frame.hpp"
+#include "od/pdo_mapping.hpp"
 
-namespace stepnode::od {
+namespace stepnode::horner {
 namespace {
 
-using DT = DataType;
-using AC = Access;
+using DT = od::DataType;
+using AC = od::Access;
+using od::encode;
+using od::Entry;
+using od::limits;
+using od::Object;
 
 std::string axis_name(unsigned axis, const char* what) {
   return "Axis " + std::to_string(axis + 1) + " " + what;
 }
 
-void add_registers(Dictionary& od, unsigned a) {
-  using namespace axis_obj;
+void add_registers(od::Dictionary& od, unsigned a) {
+  using namespace obj;
   Entry& cmd = od.var(index(a, kCommandBits), axis_name(a, "command bits"), DT::Unsigned16, AC::ReadWrite,
                       encode<uint16_t>(0), true);
   cmd.persistent = false;  // commands are edges, never stored
@@ -72,72 +76,24 @@ void add_registers(Dictionary& od, unsigned a) {
   od.var(index(a, kDirOutput), axis_name(a, "DIR output"), DT::Boolean, AC::ReadOnly, {0}, true);
 }
 
-void add_machine(Dictionary& od, unsigned a) {
-  using namespace sim_obj;
-  auto name = [a](const char* what) { return "Simulated axis " + std::to_string(a + 1) + " " + what; };
-  Object& sw = od.record(index(a, kSwitches), name("switches"));
-  sw.add(switches_sub::kHomePosition, "Home switch position", DT::Integer32, AC::ReadWrite, encode<int32_t>(1000));
-  sw.add(switches_sub::kHomeWidth, "Home switch width (0 = none)", DT::Integer32, AC::ReadWrite, encode<int32_t>(50));
-  sw.add(switches_sub::kLowerLimitEnabled, "Lower limit present", DT::Boolean, AC::ReadWrite, {1});
-  sw.add(switches_sub::kLowerLimit, "Lower limit position", DT::Integer32, AC::ReadWrite, encode<int32_t>(-100000));
-  sw.add(switches_sub::kUpperLimitEnabled, "Upper limit present", DT::Boolean, AC::ReadWrite, {1});
-  sw.add(switches_sub::kUpperLimit, "Upper limit position", DT::Integer32, AC::ReadWrite, encode<int32_t>(100000));
-  sw.add(switches_sub::kIndexPosition, "Index input position", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
-  sw.add(switches_sub::kIndexWidth, "Index input width (0 = none)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
-  Object& enc = od.record(index(a, kEncoder), name("encoder"));
-  limits<int32_t>(enc.add(encoder_sub::kStepsPerRev, "Steps per revolution", DT::Integer32, AC::ReadWrite,
-                          encode<int32_t>(2000)), 1, 1'000'000);
-  limits<int32_t>(enc.add(encoder_sub::kLines, "Encoder lines per revolution", DT::Integer32, AC::ReadWrite,
-                          encode<int32_t>(500)), 1, 1'000'000);
-  enc.add(encoder_sub::kMarkerOffset, "Marker offset", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
-  limits<int32_t>(enc.add(encoder_sub::kMarkerWidth, "Marker width", DT::Integer32, AC::ReadWrite,
-                          encode<int32_t>(4)), 1, 1'000'000);
-  Object& f = od.record(index(a, kFaults), name("faults"));
-  f.add(faults_sub::kStallBelowEnabled, "Jam below a position", DT::Boolean, AC::ReadWrite, {0});
-  f.add(faults_sub::kStallBelow, "Jam position (low)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
-  f.add(faults_sub::kStallAboveEnabled, "Jam above a position", DT::Boolean, AC::ReadWrite, {0});
-  f.add(faults_sub::kStallAbove, "Jam position (high)", DT::Integer32, AC::ReadWrite, encode<int32_t>(0));
-  f.add(faults_sub::kMissEvery, "Lose every n-th step (0 = none)", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
-  Entry& push = f.add(faults_sub::kDisplace, "Displace the load by steps", DT::Integer32, AC::WriteOnly,
-                      encode<int32_t>(0));
-  push.persistent = false;
-  od.var(index(a, kMechanicalPosition), name("mechanical position"), DT::Integer32, AC::ReadOnly,
-         encode<int32_t>(0), true);
-  od.var(index(a, kInputs), name("inputs"), DT::Unsigned8, AC::ReadOnly, {0}, true);
-}
-
 // Default PDOs of axis a: its four RPDOs and TPDOs (numbers 4a+1..4a+4). A master runs an
 // axis with no SDO at all; axis 1 uses the pre-defined connection set IDs, the others
 // start disabled (bit 31) so they cannot collide with another node's PDOs until the
 // integrator gives them IDs.
-void map_pdo(Dictionary& od, uint16_t map_index, std::initializer_list<uint32_t> words) {
-  uint8_t n = 0;
-  for (uint32_t w : words) {
-    Entry& e = od.at(map_index, ++n);
-    e.default_value = e.value = encode<uint32_t>(w);
-  }
-  Entry& count = od.at(map_index, 0);
-  count.default_value = count.value = {n};
-}
-
-uint32_t word(uint16_t index, uint8_t sub, uint8_t bits) {
-  return (static_cast<uint32_t>(index) << 16) | (static_cast<uint32_t>(sub) << 8) | bits;
-}
-
-void add_default_pdos(Dictionary& od, unsigned a) {
-  using namespace axis_obj;
+void add_default_pdos(od::Dictionary& od, unsigned a) {
+  using namespace obj;
   unsigned first = 4 * a;
   auto rmap = [&](unsigned k) { return static_cast<uint16_t>(0x1600 + first + k); };
   auto tmap = [&](unsigned k) { return static_cast<uint16_t>(0x1A00 + first + k); };
-  map_pdo(od, rmap(0), {word(index(a, kCommandBits), 0, 16), word(index(a, kDestination), 0, 32)});
+  od::set_default_mapping(od, rmap(0), {od::mapping_word(index(a, kCommandBits), 0, 16), od::mapping_word(index(a, kDestination), 0, 32)});
   uint16_t p = index(a, kProfile);
-  map_pdo(od, rmap(1), {word(p, 1, 16), word(p, 2, 16), word(p, 3, 16), word(p, 4, 16)});
+  od::set_default_mapping(od, rmap(1), {od::mapping_word(p, 1, 16), od::mapping_word(p, 2, 16), od::mapping_word(p, 3, 16), od::mapping_word(p, 4, 16)});
   uint16_t ix = index(a, kIndexedMove);
-  map_pdo(od, rmap(2), {word(p, 5, 16), word(ix, 2, 16), word(ix, 1, 32)});
-  map_pdo(od, rmap(3), {word(ix, 3, 32), word(ix, 4, 32)});
-  map_pdo(od, tmap(0), {word(index(a, kStatusBits), 0, 16), word(index(a, kMotorPosition), 0, 32)});
-  map_pdo(od, tmap(1), {word(index(a, kMotorPosition), 0, 32), word(index(a, kEncoderPosition), 0, 32)});
-  map_pdo(od, tmap(2), {word(index(a, kVelocity), 0, 32), word(index(a, kMotionPhase), 0, 8)});
+  od::set_default_mapping(od, rmap(2), {od::mapping_word(p, 5, 16), od::mapping_word(ix, 2, 16), od::mapping_word(ix, 1, 32)});
+  od::set_default_mapping(od, rmap(3), {od::mapping_word(ix, 3, 32), od::mapping_word(ix, 4, 32)});
+  od::set_default_mapping(od, tmap(0), {od::mapping_word(index(a, kStatusBits), 0, 16), od::mapping_word(index(a, kMotorPosition), 0, 32)});
+  od::set_default_mapping(od, tmap(1), {od::mapping_word(index(a, kMotorPosition), 0, 32), od::mapping_word(index(a, kEncoderPosition), 0, 32)});
+  od::set_default_mapping(od, tmap(2), {od::mapping_word(index(a, kVelocity), 0, 32), od::mapping_word(index(a, kMotionPhase), 0, 8)});
   // Positions stream at most every 10 ms while moving (inhibit time, 100 us units).
   for (unsigned k : {1u, 2u}) {
     Entry& inhibit = od.at(static_cast<uint16_t>(0x1800 + first + k), 3);
@@ -147,13 +103,11 @@ void add_default_pdos(Dictionary& od, unsigned a) {
 
 }  // namespace
 
-void add_axis_objects(Dictionary& od, const DeviceInfo& info) {
-  for (unsigned a = 0; a < info.axes; ++a) {
+void add_objects(od::Dictionary& od, unsigned axes) {
+  for (unsigned a = 0; a < axes; ++a) {
     add_registers(od, a);
     add_default_pdos(od, a);
   }
-  for (unsigned m = 0; m < motor_count(info); ++m) add_machine(od, m);
-  od.var(sim_obj::kEmergencyStop, "Simulated emergency stop input", DT::Boolean, AC::ReadWrite, {0}).persistent = false;
 }
 
-}  // namespace stepnode::od
+}  // namespace stepnode::horner

@@ -4,7 +4,8 @@
 #include <gtest/gtest.h>
 
 
-#include "od/device_dictionary.hpp"
+#include "node/profiles/tests/stepnode_device.hpp"
+#include "node/profiles/user/objects.hpp"
 #include "od/eds.hpp"
 #include "od/pdo_mapping.hpp"
 
@@ -13,7 +14,7 @@ namespace {
 
 class DeviceDictionaryTest : public ::testing::Test {
  protected:
-  void SetUp() override { build_device_dictionary(od, info); }
+  void SetUp() override { build_stepnode_device(od, info); }
   SdoAbort w32(uint16_t i, uint8_t s, uint32_t v) { return od.write(i, s, encode<uint32_t>(v)); }
   SdoAbort w8(uint16_t i, uint8_t s, uint8_t v) { return od.write(i, s, Bytes{v}); }
   DeviceInfo info{.node_id = 5};
@@ -37,7 +38,7 @@ TEST_F(DeviceDictionaryTest, AbortCodesOfTheDictionary) {
   EXPECT_EQ(w32(0x1011, 1, 0x65766173), SdoAbort::DataTransfer);                 // "save" is not "load"
   // A write-only object cannot be read (0x06010001): the simulated displacement.
   EXPECT_EQ(od.read(0x5002, 6).abort, SdoAbort::WriteOnly);
-  EXPECT_EQ(od.write(0x2F01, 0, Bytes(kUserDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
+  EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
 }
 
 TEST_F(DeviceDictionaryTest, PredefinedConnectionSetDefaults) {
@@ -140,7 +141,7 @@ TEST(PdoPacking, ReactionsRunAfterTheWholePdo) {
 TEST(Eds, RoundTripAndStructure) {
   Dictionary od;
   DeviceInfo info;
-  build_device_dictionary(od, info);
+  build_stepnode_device(od, info);
   std::string text = write_eds(od, info);
   EdsFile eds = parse_eds(text);
   for (const char* section : {"fileinfo", "deviceinfo", "dummyusage", "mandatoryobjects", "optionalobjects",

@@ -1,9 +1,7 @@
-#include "od/device_dictionary.hpp"
+#include "od/communication_objects.hpp"
 
 #include <cstdio>
 
-#include "od/axis_objects.hpp"
-#include "od/hp_objects.hpp"
 #include "od/can_frame.hpp"
 #include "od/cob_id.hpp"
 #include "od/pdo_mapping.hpp"
@@ -221,31 +219,6 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   };
 }
 
-void add_user_objects(Dictionary& od) {
-  // General-purpose storage for the master: registers it can map into PDOs and a data
-  // block, both kept by "store parameters" like any other setting.
-  Object& regs = od.record(0x2F00, "User registers", ObjectCode::Array);
-  for (unsigned i = 1; i <= 8; ++i)
-    regs.add(static_cast<uint8_t>(i), hex_index("User register %u", i), DT::Unsigned32,
-             AC::ReadWrite, encode<uint32_t>(0), true);
-  Entry& data = od.var(0x2F01, "User data", DT::Domain, AC::ReadWrite, {});
-  data.max_length = kUserDataMaxLength;
-  data.persistent = true;
-}
-
-void add_diagnostic_objects(Dictionary& od) {
-  // How many received frames the CAN socket's queue dropped since the last reset node (the
-  // kernel's SO_RXQ_OVFL count); each increase also goes out as EMCY 0x8110.
-  od.var(kReceiveOverruns, "CAN frames dropped at the socket", DT::Unsigned32, AC::ReadOnly,
-         encode<uint32_t>(0), true);
-  // Whose heartbeat loss is the master's: 0 any node in 0x1016, 1..127 only that node.
-  // A lost master ramps every moving axis down and latches %I8; another node's loss is
-  // an EMCY 0x8130 only.
-  limits<uint8_t>(od.var(kMasterNodeId, "Master node-ID (0 = any monitored node)", DT::Unsigned8,
-                         AC::ReadWrite, {0}),
-                  0, 127);
-}
-
 }  // namespace
 
 bool is_restricted_can_id(uint32_t id) {
@@ -255,7 +228,7 @@ bool is_restricted_can_id(uint32_t id) {
          (id >= 0x780 && id <= 0x7FF);
 }
 
-void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
+void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigned pdos) {
   add_identity(od, info);
   add_error_history(od);
   add_sync_and_emcy(od, info);
@@ -263,14 +236,10 @@ void build_device_dictionary(Dictionary& od, const DeviceInfo& info) {
   add_error_behaviour(od);
   add_store_restore(od);
   add_sdo_server_parameters(od, info.node_id);
-  for (unsigned n = 0; n < pdo_count(info); ++n) {
+  for (unsigned n = 0; n < pdos && n < kMaxPdos; ++n) {
     add_pdo(od, PdoDirection::Receive, n, info.node_id);
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);
   }
-  add_user_objects(od);
-  add_diagnostic_objects(od);
-  add_axis_objects(od, info);
-  add_hp_objects(od, info);
 }
 
 }  // namespace stepnode::od

@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "od/can_frame.hpp"
-#include "od/device_dictionary.hpp"
+#include "node/profiles/horner/objects.hpp"
+#include "node/profiles/tests/stepnode_device.hpp"
+#include "node/profiles/user/objects.hpp"
 #include "od/pdo_mapping.hpp"
 
 namespace stepnode::od {
@@ -23,7 +25,7 @@ uint16_t idx(unsigned base, unsigned n) { return static_cast<uint16_t>(base + n)
 
 class DeviceDictionaryRules : public ::testing::Test {
  protected:
-  void SetUp() override { build_device_dictionary(od, info); }
+  void SetUp() override { build_stepnode_device(od, info); }
   SdoAbort w32(uint16_t i, uint8_t s, uint32_t v) { return od.write(i, s, encode<uint32_t>(v)); }
   SdoAbort w16(uint16_t i, uint8_t s, uint16_t v) { return od.write(i, s, encode<uint16_t>(v)); }
   SdoAbort w8(uint16_t i, uint8_t s, unsigned v) { return od.write(i, s, Bytes{static_cast<uint8_t>(v)}); }
@@ -40,7 +42,7 @@ TEST_P(DefaultsForNode, PredefinedConnectionSet) {
   const uint8_t node = static_cast<uint8_t>(GetParam());
   DeviceInfo info{.node_id = node};
   Dictionary od;
-  build_device_dictionary(od, info);
+  build_stepnode_device(od, info);
   EXPECT_EQ(od.get<uint32_t>(0x1005, 0), 0x80u);            // SYNC, not produced
   EXPECT_EQ(od.get<uint32_t>(0x1014, 0), 0x80u + node);     // EMCY
   EXPECT_EQ(od.get<uint8_t>(0x1200, 0), 2);
@@ -52,7 +54,7 @@ TEST_P(DefaultsForNode, PredefinedConnectionSet) {
     EXPECT_EQ(od.get<uint32_t>(idx(0x1400, n), 1), 0x200u + 0x100 * n + node);       // RPDO
   }
   // PDO 5 and up have no CAN-ID until the integrator gives them one.
-  for (unsigned n = 4; n < pdo_count(info); ++n) {
+  for (unsigned n = 4; n < pdo_count(); ++n) {
     EXPECT_EQ(od.get<uint32_t>(idx(0x1800, n), 1), kInvalid | kNoRtr) << n;
     EXPECT_EQ(od.get<uint32_t>(idx(0x1400, n), 1), kInvalid) << n;
   }
@@ -83,10 +85,10 @@ TEST_F(DeviceDictionaryRules, IdentityAndOtherDefaults) {
   EXPECT_EQ(od.get<uint8_t>(0x1010, 0), 4);
   EXPECT_EQ(od.get<uint8_t>(0x1011, 0), 4);
 
-  DeviceInfo custom{.node_id = 9, .axes = 1, .device_name = "x", .vendor_id = 0x1234,
+  DeviceInfo custom{.node_id = 9, .device_name = "x", .vendor_id = 0x1234,
                     .product_code = 7, .revision = 0x00020003, .serial_number = 42};
   Dictionary other;
-  build_device_dictionary(other, custom);
+  build_stepnode_device(other, custom, {.axes = 1});
   EXPECT_EQ(other.value(0x1008, 0), encode_string("x"));
   EXPECT_EQ(other.get<uint32_t>(0x1018, 1), 0x1234u);
   EXPECT_EQ(other.get<uint32_t>(0x1018, 2), 7u);
@@ -95,7 +97,7 @@ TEST_F(DeviceDictionaryRules, IdentityAndOtherDefaults) {
 }
 
 TEST_F(DeviceDictionaryRules, PdoCommunicationParameterLayout) {
-  for (unsigned n = 0; n < pdo_count(info); ++n) {
+  for (unsigned n = 0; n < pdo_count(); ++n) {
     SCOPED_TRACE(n);
     const Object* rpdo = od.object(idx(0x1400, n));
     const Object* tpdo = od.object(idx(0x1800, n));
@@ -126,25 +128,25 @@ TEST_F(DeviceDictionaryRules, PdoCommunicationParameterLayout) {
 }
 
 TEST(DevicePdoCount, FourRpdosAndFourTpdosPerAxis) {
-  EXPECT_EQ(kPdosPerAxis, 4u);
+  EXPECT_EQ(horner::kPdosPerAxis, 4u);
   for (unsigned axes : {1u, 2u, 3u, 8u}) {
     SCOPED_TRACE(axes);
-    DeviceInfo info{.axes = axes};
+    node::DeviceLayout layout{.axes = axes};
     Dictionary od;
-    build_device_dictionary(od, info);
-    EXPECT_EQ(pdo_count(info), 4 * axes);
+    build_stepnode_device(od, DeviceInfo{}, layout);
+    EXPECT_EQ(pdo_count(layout), 4 * axes);
     for (unsigned base : {0x1400u, 0x1600u, 0x1800u, 0x1A00u}) {
       EXPECT_NE(od.object(idx(base, 4 * axes - 1)), nullptr) << std::hex << base;
       EXPECT_EQ(od.object(idx(base, 4 * axes)), nullptr) << std::hex << base;
     }
   }
-  DeviceInfo spm30{.axes = 1, .spm30_multiplexed = true};
+  node::DeviceLayout spm30{.axes = 1, .spm30_multiplexed = true};
   EXPECT_EQ(pdo_count(spm30), 4u);
-  EXPECT_EQ(motor_count(spm30), 3u);
+  EXPECT_EQ(spm30.motors(), 3u);
 }
 
 TEST_F(DeviceDictionaryRules, DefaultMappingsAreValidInTheirDirection) {
-  for (unsigned n = 0; n < pdo_count(info); ++n) {
+  for (unsigned n = 0; n < pdo_count(); ++n) {
     for (bool rx : {true, false}) {
       uint16_t map = idx(rx ? 0x1600 : 0x1A00, n);
       SCOPED_TRACE(testing::Message() << std::hex << map);
@@ -195,8 +197,8 @@ TEST_F(DeviceDictionaryRules, EveryAbortCodeOfTheDeviceDictionary) {
   EXPECT_EQ(od.read(0x1018, 5).abort, SdoAbort::NoSubindex);                     // 0x06090011
   EXPECT_EQ(od.write(0x1017, 0, encode<uint32_t>(5)), SdoAbort::LengthTooHigh);  // 0x06070012
   EXPECT_EQ(od.write(0x1017, 0, Bytes{5}), SdoAbort::LengthTooLow);              // 0x06070013
-  EXPECT_EQ(od.write(0x2F01, 0, Bytes(kUserDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
-  EXPECT_EQ(od.write(0x2F01, 0, Bytes(kUserDataMaxLength, 0)), SdoAbort::None);
+  EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
+  EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength, 0)), SdoAbort::None);
   EXPECT_EQ(w8(0x1003, 0, 1), SdoAbort::InvalidValue);                           // 0x06090030
   EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);                           // 0x06090031
   EXPECT_EQ(od.write(0x2002, 0, encode<int32_t>(-8'388'609)), SdoAbort::ValueTooLow);  // 0x06090032

@@ -1,17 +1,16 @@
 // The HP 44714A channel objects of each axis (0x2n10-0x2n1E, next to the Horner registers
-// 0x2n00-0x2n0A of od/axis_objects.*), the simulated terminal-module inputs (0x5n05) and
+// 0x2n00-0x2n0A of node/profiles/horner), the simulated terminal-module inputs (0x5n05) and
 // the default mapping of TPDO 4n+4. Pure table: node/hp_service.cpp connects them to the
 // channels. Commands are writes: a write that the channel refuses is answered with an SDO
 // abort, and the channel's error number / conflict code stays readable.
 #pragma once
 #include <cstdint>
 
-#include "od/device_dictionary.hpp"
 #include "od/dictionary.hpp"
 
-namespace stepnode::od {
+namespace stepnode::hp44714a {
 
-namespace hp_obj {
+namespace obj {
 constexpr uint16_t kProfile = 0x10;      // RECORD: PROFILE FREQ|WIDTH min max slope pwidth|period, apply
 constexpr uint16_t kPscale = 0x11;       // REAL64 rw, stored: units per step
 constexpr uint16_t kMove = 0x12;         // RECORD: 1 MOVE d REL, 2 MOVE d ABS, 3 NOWAIT
@@ -32,39 +31,44 @@ inline uint16_t index(unsigned axis, uint16_t offset) {
 }
 constexpr uint16_t kSimInputs = 0x05;  // 0x5n05 RECORD: HALT input level, TEST jumper
 inline uint16_t sim_index(unsigned axis) { return static_cast<uint16_t>(0x5000 + 0x100 * axis + kSimInputs); }
-}  // namespace hp_obj
+}  // namespace obj
 
-namespace hp_profile_sub {
+namespace profile_sub {
 constexpr uint8_t kMode = 1, kMin = 2, kMax = 3, kSlope = 4, kLast = 5, kApply = 6;
 }
-namespace hp_move_sub {
+namespace move_sub {
 constexpr uint8_t kRelative = 1, kAbsolute = 2, kNowait = 3;
 }
-namespace hp_output_sub {
+namespace output_sub {
 constexpr uint8_t kStandbyMode = 1, kStandbySense = 2, kPulseMode = 3, kPstpSense = 4, kNdirSense = 5,
                   kStbyLevel = 6, kMotorPowered = 7, kPstpPulses = 8, kNdirPulses = 9;
 }
-namespace hp_limits_sub {
+namespace limits_sub {
 constexpr uint8_t kPlimSense = 1, kNlimSense = 2, kHaltMode = 3, kHaltSgl = 4;
 }
-namespace hp_quad_sub {
+namespace quad_sub {
 constexpr uint8_t kQscale = 1, kQindex = 2, kQpos = 3, kCount = 4;
 }
-namespace hp_intr_sub {
+namespace intr_sub {
 constexpr uint8_t kEnable = 1, kEvents = 2;
 }
-namespace hp_timing_sub {
+namespace timing_sub {
 constexpr uint8_t kTriggerUs = 1, kFirstStepUs = 2, kFirstStepAfterTriggerUs = 3;
 }
-namespace hp_sim_sub {
+namespace sim_sub {
 constexpr uint8_t kHaltInputHigh = 1, kTestJumper = 2;
 }
 
 // EMCY codes (manufacturer-specific): an HP error number n is 0xFF00 + n (0xFF59..0xFF5E);
 // an interrupt for a hard limit, HALT SGL or the HALT switch is 0xFF43 / 0xFF44 / 0xFF45.
-constexpr uint16_t kHpErrorEmcyBase = 0xFF00;
-constexpr uint16_t kHpInterruptEmcyBase = 0xFF40;
+constexpr uint16_t kErrorEmcyBase = 0xFF00;
+constexpr uint16_t kInterruptEmcyBase = 0xFF40;
+// The manual's words for those codes ("HP error 91 MUST STOP TO CHANGE DIRECTION"), or
+// nullptr for a code that is not the channels'.
+const char* emcy_text(uint16_t code);
 
-void add_hp_objects(Dictionary& dictionary, const DeviceInfo& info);
+// The channel objects of `axes` axes and the default mapping of their TPDO 4n+4 (the PDO
+// objects must exist).
+void add_objects(od::Dictionary& dictionary, unsigned axes);
 
-}  // namespace stepnode::od
+}  // namespace stepnode::hp44714a

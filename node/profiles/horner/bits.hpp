@@ -4,10 +4,10 @@
 #pragma once
 #include <cstdint>
 
-namespace stepnode::od {
+namespace stepnode::horner {
 
 // %I1..%I16 as bits 0..15 of the status word.
-namespace axis_status {
+namespace status {
 constexpr uint16_t kEmergencyStop = 1u << 0;   // %I1
 constexpr uint16_t kLowerLimit = 1u << 1;      // %I2
 constexpr uint16_t kUpperLimit = 1u << 2;      // %I3
@@ -23,10 +23,10 @@ constexpr uint16_t kAtHome = 1u << 12;         // %I13 (at origin)
 constexpr uint16_t kAccelerating = 1u << 13;   // %I14
 constexpr uint16_t kDecelerating = 1u << 14;   // %I15
 constexpr uint16_t kMoving = 1u << 15;         // %I16
-}  // namespace axis_status
+}  // namespace status
 
 // %Q1..%Q16 as bits 0..15 of the command word.
-namespace axis_command {
+namespace command {
 constexpr uint16_t kSelectAxis1 = 1u << 0;   // %Q1
 constexpr uint16_t kSelectAxis2 = 1u << 1;   // %Q2
 constexpr uint16_t kSelectAxis3 = 1u << 2;   // %Q3
@@ -43,6 +43,6 @@ constexpr uint16_t kSetPosition = 1u << 12;  // %Q13
 constexpr uint16_t kClearErrors = 1u << 13;  // %Q14
 constexpr uint16_t kDecelStop = 1u << 14;    // %Q15
 constexpr uint16_t kImmediateStop = 1u << 15;  // %Q16
-}  // namespace axis_command
+}  // namespace command
 
-}  // namespace stepnode::od
+}  // namespace stepnode::horner

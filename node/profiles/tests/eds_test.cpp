@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "node/profiles/tests/stepnode_device.hpp"
 #include "od/eds.hpp"
 #include "od/pdo_mapping.hpp"
 
@@ -60,7 +61,7 @@ Bytes eds_default_bytes(DataType type, const std::string& text, uint8_t node_id)
 class EdsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    build_device_dictionary(od, info);
+    build_stepnode_device(od, info);
     text = write_eds(od, info);
     eds = parse_eds(text);
   }
@@ -140,7 +141,7 @@ TEST_F(EdsTest, LimitsAreWrittenInTheEntrysType) {
 TEST_F(EdsTest, NodeDependentDefaultsAreNodeIdExpressions) {
   DeviceInfo other_info{.node_id = 77};
   Dictionary other;
-  build_device_dictionary(other, other_info);
+  build_stepnode_device(other, other_info);
   std::set<std::pair<uint16_t, uint8_t>> node_dependent;
   for (const auto& [index, obj] : od.objects()) {
     for (const auto& [sub, e] : obj.entries) {
@@ -234,9 +235,9 @@ TEST_F(EdsTest, DeviceInfo) {
 
 TEST(EdsPdoCount, NrOfPdosIsFourPerAxis) {
   for (unsigned axes : {1u, 2u, 8u}) {
-    DeviceInfo info{.axes = axes};
+    DeviceInfo info;
     Dictionary od;
-    build_device_dictionary(od, info);
+    build_stepnode_device(od, info, {.axes = axes});
     EdsFile eds = parse_eds(write_eds(od, info));
     EXPECT_EQ(eds.sections["deviceinfo"]["nrofrxpdo"], std::to_string(4 * axes));
     EXPECT_EQ(eds.sections["deviceinfo"]["nroftxpdo"], std::to_string(4 * axes));

@@ -1,6 +1,6 @@
 // The EDS committed at the repository root (stepnode.eds) is the one the dictionary table
 // generates for the default DeviceInfo{}. When the object map changes, regenerate it:
-//   STEPNODE_WRITE_EDS=1 build/od/od_tests --gtest_filter='*Eds*Repo*'
+//   STEPNODE_WRITE_EDS=1 build/node/device_objects_tests --gtest_filter='*Eds*Repo*'
 // and commit the file.
 #include <gtest/gtest.h>
 
@@ -9,11 +9,11 @@
 #include <sstream>
 #include <string>
 
-#include "od/device_dictionary.hpp"
+#include "node/profiles/tests/stepnode_device.hpp"
 #include "od/eds.hpp"
 
 #ifndef STEPNODE_SOURCE_DIR
-#error "od_tests needs STEPNODE_SOURCE_DIR (see od/CMakeLists.txt)"
+#error "device_objects_tests needs STEPNODE_SOURCE_DIR (see node/CMakeLists.txt)"
 #endif
 
 namespace stepnode::od {
@@ -22,7 +22,8 @@ namespace {
 std::string generated_eds() {
   Dictionary od;
   DeviceInfo info;
-  build_device_dictionary(od, info);
+  info.description = node::DeviceLayout{}.description();  // as the node describes itself
+  build_stepnode_device(od, info);
   return write_eds(od, info);
 }
 
@@ -46,14 +47,14 @@ TEST(EdsRepo, StepnodeEdsEqualsTheGenerator) {
   }
   std::ifstream in(path, std::ios::binary);
   ASSERT_TRUE(in) << path << " is missing. Generate it with:\n"
-                  << "  STEPNODE_WRITE_EDS=1 build/od/od_tests --gtest_filter='*Eds*Repo*'";
+                  << "  STEPNODE_WRITE_EDS=1 build/node/device_objects_tests --gtest_filter='*Eds*Repo*'";
   std::stringstream file;
   file << in.rdbuf();
   EXPECT_TRUE(file.str() == generated)
       << path << " differs from the dictionary (first difference: "
       << first_difference(file.str(), generated) << ").\n"
       << "Regenerate it and commit it:\n"
-      << "  STEPNODE_WRITE_EDS=1 build/od/od_tests --gtest_filter='*Eds*Repo*'";
+      << "  STEPNODE_WRITE_EDS=1 build/node/device_objects_tests --gtest_filter='*Eds*Repo*'";
 }
 
 TEST(EdsRepo, StepnodeEdsIsAValidEdsOfTheDevice) {
@@ -64,7 +65,7 @@ TEST(EdsRepo, StepnodeEdsIsAValidEdsOfTheDevice) {
   EdsFile eds = parse_eds(file.str());
   EXPECT_EQ(eds.sections["fileinfo"]["filename"], "stepnode.eds");
   Dictionary od;
-  build_device_dictionary(od, DeviceInfo{});
+  build_stepnode_device(od, DeviceInfo{});
   size_t entries = 0;
   for (const auto& [index, obj] : od.objects()) entries += obj.entries.size();
   EXPECT_EQ(eds.entries.size(), entries);

@@ -1,0 +1,41 @@
+// The objects of a stepnode device as configured: the CiA 301 communication objects
+// (od/communication_objects.*), the node's diagnostics, and the tables of the profiles
+// the device has (node/profiles/*). Pure tables: the node builds its dictionary with it,
+// and so do stepctl (names and types of every object) and the tests.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "od/communication_objects.hpp"
+#include "od/dictionary.hpp"
+
+namespace stepnode::node {
+
+constexpr unsigned kMaxAxes = 8;
+
+// Which profiles a device has and how many axes they drive. A profile is the objects of
+// one folder of node/profiles and, in the node, the service that reacts to them.
+struct DeviceLayout {
+  unsigned axes = 3;  // 1..kMaxAxes; each axis owns four RPDOs and four TPDOs
+  // SPM30 3-axis models: one register set (axis 1) multiplexes 3 motors, chosen with
+  // %Q1..%Q3. Then axes = 1 and the simulated machine has 3 motors.
+  bool spm30_multiplexed = false;
+  bool horner = true;  // the Horner register set (0x2n00-0x2n0A)
+  bool hp = true;      // the HP 44714A channels (0x2n10-0x2n1E)
+  bool user = true;    // the user objects (0x2F00, 0x2F01)
+  // Simulated motors (0x5000 blocks): one per axis, or 3 behind a multiplexed axis.
+  unsigned motors() const { return spm30_multiplexed ? 3 : axes; }
+  // RPDOs (and as many TPDOs): four per axis.
+  unsigned pdos() const;
+  // "Horner, HP 44714A, user objects; 3 axes on the simulated machine" (the EDS comment).
+  std::string description() const;
+};
+
+// The communication objects and the node's diagnostics (what the CiA 301 slave needs).
+void add_node_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout);
+// The tables of the profiles in `layout`, with their default PDO mappings.
+void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout);
+// Both: every object of the device.
+void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout);
+
+}  // namespace stepnode::node
