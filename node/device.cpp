@@ -3,14 +3,21 @@
 #include <spdlog/spdlog.h>
 
 #include "node/diagnostic_objects.hpp"
+#include "node/profiles/horner/service.hpp"
+#include "node/profiles/hp44714a/service.hpp"
+#include "node/profiles/sim/service.hpp"
 
 namespace stepnode::node {
 
 Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults, CanopenNode::Send send)
     : canopen_(options, std::move(send)),
       refused_(complete_dictionary(canopen_, options.layout, object_defaults)),
-      motion_(canopen_.dictionary(), options.layout, canopen_.emcy()),
-      hp_(canopen_.dictionary(), options.layout, motion_, canopen_.emcy()) {
+      axes_(options.layout) {
+  od::Dictionary& od = canopen_.dictionary();
+  // The order they are called in: the back end's settings first, then the front ends.
+  profiles_.push_back(std::make_unique<SimService>(od, axes_));
+  if (options.layout.horner) profiles_.push_back(std::make_unique<HornerService>(od, axes_, canopen_.emcy()));
+  if (options.layout.hp) profiles_.push_back(std::make_unique<HpService>(od, axes_, canopen_.emcy()));
   for (const RefusedMapping& r : refused_) {
     spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
                  r.index, od::abort_text(r.reason));
@@ -35,10 +42,36 @@ void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arriv
   frame_arrival_us_ = 0;
 }
 
+void Device::advance(uint64_t now_us) {
+  axes_.advance(now_us);
+  for (auto& p : profiles_) p->advance(now_us);
+  axes_.advance(now_us);  // the steps of a job a profile started at or before now
+  publish();
+}
+
+void Device::publish() {
+  for (auto& p : profiles_) p->publish();
+}
+
+void Device::reset_application(uint64_t now_us) {
+  axes_.advance(now_us);
+  for (auto& p : profiles_) p->configure(now_us);
+  axes_.power_up(now_us);
+  for (auto& p : profiles_) p->power_up(now_us);
+  publish();
+}
+
 void Device::sync(uint64_t now_us) {
   // TRIG SYS starts at the SYNC frame's arrival, not when the process got round to reading
   // it: every node on the bus then starts together. A SYNC produced here: now.
-  hp_.on_sync(now_us, frame_arrival_us_ ? frame_arrival_us_ : now_us);
+  advance(now_us);
+  for (auto& p : profiles_) p->sync(now_us, frame_arrival_us_ ? frame_arrival_us_ : now_us);
+  advance(now_us);
+}
+
+void Device::master_lost(uint64_t now_us) {
+  axes_.master_lost(now_us);
+  publish();
 }
 
 void Device::state_changed(NmtState state, uint64_t now_us) {
@@ -47,7 +80,7 @@ void Device::state_changed(NmtState state, uint64_t now_us) {
   // states and motion"). Pre-operational keeps SDO, and the axes keep their job.
   if (state == NmtState::Stopped) {
     spdlog::warn("NMT stopped: every moving axis ramps down");
-    motion_.master_lost(now_us);
+    master_lost(now_us);
   }
 }
 
@@ -56,7 +89,7 @@ void Device::communication_error(CommunicationError error, uint8_t node, uint64_
   spdlog::warn("{}: every moving axis ramps down", error == CommunicationError::BusOff
                                                        ? std::string("bus-off")
                                                        : "master (node " + std::to_string(node) + ") lost");
-  motion_.master_lost(now_us);
+  master_lost(now_us);
 }
 
 bool Device::is_master(uint8_t node) {

@@ -1,20 +1,22 @@
-// The device assembly: the one place the node is put together. It builds the CiA 301
-// slave (CanopenNode), the Horner axes on the simulated machine (MotionService) and the
-// HP 44714A channels on the same axes (HpService) from the configuration, and is their
+// The device assembly: the one place the node is put together. From the configuration it
+// builds the CiA 301 slave (CanopenNode), the axes on their back end (AxisBank: the engine
+// and the simulated machine) and the profiles the device has (node/profiles/*: the
+// simulator's objects, the Horner registers, the HP 44714A channels), and is their
 // application: it advances them, powers them up, hands them SYNC, and applies the policy
 // for a lost master and for NMT Stopped. node/main.cpp, the benchmarks and the test
 // harnesses build the node through it and wire nothing themselves.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "node/application.hpp"
+#include "node/axis_bank.hpp"
 #include "node/canopen_node.hpp"
 #include "node/config.hpp"
-#include "node/hp_service.hpp"
-#include "node/motion_service.hpp"
+#include "node/profile.hpp"
 
 namespace stepnode::node {
 
@@ -43,21 +45,22 @@ class Device final : private Application {
 
   CanopenNode& canopen() { return canopen_; }
   od::Dictionary& dictionary() { return canopen_.dictionary(); }
-  MotionService& motion() { return motion_; }
-  HpService& hp() { return hp_; }
-  sim::Machine& machine() { return motion_.machine(); }
+  AxisBank& axes() { return axes_; }
+  sim::Machine& machine() { return axes_.machine(); }
   const std::vector<RefusedMapping>& refused_mappings() const { return refused_; }
 
  private:
   // Application: what the CanopenNode calls.
-  void advance(uint64_t now_us) override { hp_.advance(now_us); }  // the axes, then the channels
-  void reset_application(uint64_t now_us) override { hp_.power_up(now_us); }
+  void advance(uint64_t now_us) override;
+  void reset_application(uint64_t now_us) override;
   void sync(uint64_t now_us) override;
   void state_changed(NmtState state, uint64_t now_us) override;
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us) override;
 
   // 0x2F11: 0 makes every monitored node a master; otherwise only that node is.
   bool is_master(uint8_t node);
+  void master_lost(uint64_t now_us);
+  void publish();
 
   // The profiles' objects, then the configuration's defaults over them.
   static std::vector<RefusedMapping> complete_dictionary(CanopenNode& canopen, const DeviceLayout& layout,
@@ -65,8 +68,8 @@ class Device final : private Application {
 
   CanopenNode canopen_;
   std::vector<RefusedMapping> refused_;  // before the services: they load what it leaves
-  MotionService motion_;
-  HpService hp_;
+  AxisBank axes_;
+  std::vector<std::unique_ptr<Profile>> profiles_;  // called in this order
   uint64_t frame_arrival_us_ = 0;  // the frame being handled (0: none, or unknown)
 };
 

@@ -90,8 +90,8 @@ int main(int argc, char** argv) {
   double wall = static_cast<double>(now_us() - start) / 1e6;
   double cpu = cpu_seconds() - cpu0;
   int64_t steps = 0;
-  for (unsigned a = 0; a < 3; ++a) steps += device.motion().axis(a).motor_position();
-  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", device.motion().axis(0).velocity());
+  for (unsigned a = 0; a < 3; ++a) steps += device.axes().axis(a).motor_position();
+  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", device.axes().axis(0).velocity());
   std::printf("wall time            %.2f s, %llu ticks of %llu us\n", wall,
               static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(tick_us));
   std::printf("steps generated      %lld (%.0f steps/s in total)\n", static_cast<long long>(steps),

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include "node/motion/axis_registers.hpp"
-#include "node/motion_service.hpp"
 #include "node/tests/node_harness.hpp"
 
 namespace stepnode::node::test {

@@ -1,5 +1,5 @@
 // EMCY into code, register, manufacturer bytes and text (CiA 301 words, a stepnode's axis
-// error bits by name as node/motion_service.cpp sends them); CAN error frames into the bus
+// error bits by name as node/profiles/horner/service.cpp sends them); CAN error frames into the bus
 // counters.
 #include <gtest/gtest.h>
 
@@ -24,7 +24,7 @@ struct WithNode : ::testing::Test {
 
 TEST_F(WithNode, AxisErrorNamesTheModulesErrorBits) {
   // Axis 2 latched lower limit + motor stalled; the status word also has power-up (%I8)
-  // and position valid (%I9). Layout of node/motion_service.cpp on_axis_event.
+  // and position valid (%I9). Layout of node/profiles/horner/service.cpp on_axis_event.
   bus.send(node.emcy(0xFF02, 0x80, {0x12, 0x92, 0x01, 2, 0}));
   ASSERT_EQ(bus.sink.emergencies.size(), 1u);
   const EmergencySample& e = bus.sink.emergencies[0];

@@ -1,7 +1,7 @@
 // The Horner profile's objects: the register set of each axis (0x2000-0x27FF, one block of
 // 0x100 per axis: SPM30 chapter 3, STP100 chapter 4) and their default PDOs (the first
 // three RPDOs and TPDOs of each axis). Pure table, shared by the node, stepctl and the
-// bridge; node/motion_service.cpp connects the objects to the axes.
+// bridge; node/profiles/horner/service.cpp connects the objects to the axes.
 #pragma once
 #include <cstdint>
 

@@ -1,6 +1,6 @@
 // The HP 44714A channel objects of each axis (0x2n10-0x2n1E, next to the Horner registers
 // 0x2n00-0x2n0A of node/profiles/horner), the simulated terminal-module inputs (0x5n05) and
-// the default mapping of TPDO 4n+4. Pure table: node/hp_service.cpp connects them to the
+// the default mapping of TPDO 4n+4. Pure table: node/profiles/hp44714a/service.cpp connects them to the
 // channels. Commands are writes: a write that the channel refuses is answered with an SDO
 // abort, and the channel's error number / conflict code stays readable.
 #pragma once

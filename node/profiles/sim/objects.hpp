@@ -1,6 +1,6 @@
 // The simulated machine's objects (0x5000-0x57FF per motor, 0x5F00 shared): its switches,
 // encoder and faults as settings, its mechanical position and inputs as readings. Pure
-// table; node/motion_service.cpp connects it to the simulated machine (node/sim).
+// table; node/profiles/sim/service.cpp connects it to the simulated machine (node/sim).
 #pragma once
 #include <cstdint>
 

@@ -1,4 +1,4 @@
-#include "node/refused_words.hpp"
+#include "node/profiles/horner/refused_words.hpp"
 
 #include "node/profiles/horner/objects.hpp"
 

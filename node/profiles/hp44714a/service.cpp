@@ -1,4 +1,4 @@
-#include "node/hp_service.hpp"
+#include "node/profiles/hp44714a/service.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -28,11 +28,10 @@ bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
 
 }  // namespace
 
-HpService::HpService(od::Dictionary& dictionary, const DeviceLayout& layout, MotionService& motion,
-                     EmcyProducer& emcy)
-    : dictionary_(dictionary), motion_(motion), emcy_(emcy) {
-  for (unsigned a = 0; a < layout.axes; ++a) {
-    channels_.push_back(std::make_unique<hp::Channel>(motion_.axis(a), motion_.machine().axes.at(a)));
+HpService::HpService(od::Dictionary& dictionary, AxisBank& axes, EmcyProducer& emcy)
+    : dictionary_(dictionary), axes_(axes), emcy_(emcy) {
+  for (unsigned a = 0; a < axes_.count(); ++a) {
+    channels_.push_back(std::make_unique<hp::Channel>(axes_.axis(a), axes_.machine().axes.at(a)));
     hp::Channel& ch = *channels_.back();
     ch.on_interrupt = [this, a](uint8_t event, motion::Tick) {
       // Halts and limits also go out as EMCY (condition 3, 4, 5 -> 0xFF43..0xFF45).
@@ -40,7 +39,7 @@ HpService::HpService(od::Dictionary& dictionary, const DeviceLayout& layout, Mot
       for (uint8_t b = event; b; b >>= 1) ++condition;
       if (condition >= 3)
         emcy_.report(static_cast<uint16_t>(hp44714a::kInterruptEmcyBase + condition), error_bits::kManufacturer,
-                     {event, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
+                     {event, static_cast<uint8_t>(a + 1), 0, 0, 0}, axes_.now_us());
     };
     install_hooks(a);
   }
@@ -56,7 +55,7 @@ SdoAbort HpService::result(unsigned a, hp::Error e) {
   if (e == hp::Error::ValueOutOfRange) return SdoAbort::InvalidValue;  // no HP error number
   uint8_t n = static_cast<uint8_t>(e);
   emcy_.report(static_cast<uint16_t>(hp44714a::kErrorEmcyBase + n), error_bits::kManufacturer,
-               {n, static_cast<uint8_t>(a + 1), 0, 0, 0}, now_us_);
+               {n, static_cast<uint8_t>(a + 1), 0, 0, 0}, axes_.now_us());
   publish(a);
   return SdoAbort::DeviceState;
 }
@@ -195,7 +194,7 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
                  static_cast<int>(c));
     dictionary_.reset_to_defaults(p, p);
     emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
-                 {static_cast<uint8_t>(p), static_cast<uint8_t>(p >> 8), 0, 1, 0}, now_us_);
+                 {static_cast<uint8_t>(p), static_cast<uint8_t>(p >> 8), 0, 1, 0}, axes_.now_us());
   }
   double s = dictionary_.get<double>(index(a, kPscale), 0);
   if (s != 0 && std::isfinite(s)) ch.pscale(s);
@@ -223,32 +222,30 @@ void HpService::publish(unsigned a) {
   od.put<uint8_t>(out, hp44714a::output_sub::kMotorPowered, ch.motor_powered() ? 1 : 0);
   // In the simulation the STBY output drives motor power (issue 4): with STANDBY ON a
   // Horner move still counts its steps, but the load does not move.
-  motion_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
+  axes_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
   od.put<uint32_t>(out, hp44714a::output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
   od.put<uint32_t>(out, hp44714a::output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
   od.put<double>(index(a, kPosition), 0, ch.pos_query());
   od.put<int32_t>(index(a, kQuadrature), hp44714a::quad_sub::kCount, ch.quadrature_count());
   uint16_t t = index(a, kTiming);
   if (auto trig = ch.trigger_time()) {
-    od.put<uint32_t>(t, hp44714a::timing_sub::kTriggerUs, static_cast<uint32_t>(motion_.micros(*trig)));
+    od.put<uint32_t>(t, hp44714a::timing_sub::kTriggerUs, static_cast<uint32_t>(axes_.micros(*trig)));
     auto first = ch.first_step_time();
-    od.put<uint32_t>(t, hp44714a::timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(motion_.micros(*first)) : 0);
+    od.put<uint32_t>(t, hp44714a::timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(axes_.micros(*first)) : 0);
     od.put<int32_t>(t, hp44714a::timing_sub::kFirstStepAfterTriggerUs,
-                    first ? static_cast<int32_t>(motion_.micros(*first) - motion_.micros(*trig)) : -1);
+                    first ? static_cast<int32_t>(axes_.micros(*first) - axes_.micros(*trig)) : -1);
   }
 }
 
-void HpService::advance(uint64_t now_us) {
-  now_us_ = now_us;
-  motion_.advance_axes(now_us);  // the clock's epoch, and every axis to now
+void HpService::advance(uint64_t) {
   for (auto& ch : channels_) ch->advance(now());
-  motion_.advance(now_us);  // publishes the axes once, with what the channels started or stopped
+}
+
+void HpService::publish() {
   for (unsigned a = 0; a < channels_.size(); ++a) publish(a);
 }
 
-void HpService::power_up(uint64_t now_us) {
-  now_us_ = now_us;
-  motion_.power_up(now_us);
+void HpService::power_up(uint64_t) {
   for (unsigned a = 0; a < channels_.size(); ++a) {
     channels_[a]->power_up(now());
     apply_stored(a, now());
@@ -256,11 +253,9 @@ void HpService::power_up(uint64_t now_us) {
   }
 }
 
-void HpService::on_sync(uint64_t now_us, uint64_t frame_us) {
-  advance(now_us);
-  motion::Tick at = motion_.ticks(std::min(frame_us, now_us));
+void HpService::sync(uint64_t now_us, uint64_t frame_us) {
+  motion::Tick at = axes_.ticks(std::min(frame_us, now_us));
   for (auto& ch : channels_) ch->sync(at);
-  advance(now_us);
 }
 
 }  // namespace stepnode::node

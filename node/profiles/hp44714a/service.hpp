@@ -1,5 +1,5 @@
-// Connects the HP 44714A channels (node/motion/hp_channel.*) to their objects
-// (od/hp_objects.*): a write is the manual's command, acted on at once; a refused command
+// The HP 44714A profile in the node: connects the channels (node/motion/hp_channel.*) to
+// their objects (node/profiles/hp44714a/objects.*): a write is the manual's command, acted on at once; a refused command
 // is answered with an SDO abort (settings conflict 0x06040043, HP error 0x08000022), its
 // number stays in 0x2n19 / 0x2n1A and an error number also goes out as EMCY 0xFF00 + n.
 // DONE?, the error number and the interrupt event word are published after every advance
@@ -11,24 +11,25 @@
 
 #include "node/emcy.hpp"
 #include "node/motion/hp_channel.hpp"
-#include "node/motion_service.hpp"
-#include "node/device_objects.hpp"
+#include "node/axis_bank.hpp"
+#include "node/profile.hpp"
 #include "od/dictionary.hpp"
 
 namespace stepnode::node {
 
-class HpService {
+class HpService final : public Profile {
  public:
-  HpService(od::Dictionary& dictionary, const DeviceLayout& layout, MotionService& motion, EmcyProducer& emcy);
+  HpService(od::Dictionary& dictionary, AxisBank& axes, EmcyProducer& emcy);
 
-  // Brings the axes and channels to `now_us` and publishes both (use instead of
-  // MotionService::advance).
-  void advance(uint64_t now_us);
-  // Power-up / NMT reset node: the axes, then the channels' power-on state and stored settings.
-  void power_up(uint64_t now_us);
+  // The channels' timed work (DELAY, triggers, the end of a move) up to `now_us`.
+  void advance(uint64_t now_us) override;
+  void publish() override;
+  // Power-up / NMT reset node, after the axes: the channels' power-on state, then their
+  // stored settings.
+  void power_up(uint64_t now_us) override;
   // A SYNC was received (or produced) at `frame_us` (<= now_us; its arrival on the bus):
   // TRIG SYS. The armed channels are idle, so a start a little in the past is exact.
-  void on_sync(uint64_t now_us, uint64_t frame_us);
+  void sync(uint64_t now_us, uint64_t frame_us) override;
 
   motion::hp::Channel& channel(unsigned a) { return *channels_.at(a); }
 
@@ -37,13 +38,12 @@ class HpService {
   void apply_stored(unsigned a, motion::Tick now);
   void publish(unsigned a);
   od::SdoAbort result(unsigned a, motion::hp::Error e);
-  motion::Tick now() const { return motion_.ticks(now_us_); }
+  motion::Tick now() const { return axes_.now(); }
 
   od::Dictionary& dictionary_;
-  MotionService& motion_;
+  AxisBank& axes_;
   EmcyProducer& emcy_;
   std::vector<std::unique_ptr<motion::hp::Channel>> channels_;
-  uint64_t now_us_ = 0;
 };
 
 }  // namespace stepnode::node

@@ -1,0 +1,42 @@
+#include "node/axis_bank.hpp"
+
+namespace stepnode::node {
+
+AxisBank::AxisBank(const DeviceLayout& layout) {
+  machine_.axes.resize(layout.motors());
+  for (unsigned a = 0; a < layout.axes; ++a) {
+    std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
+    if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
+    axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, motors, &machine_.emergency_stop));
+    axes_.back()->on_event = [this, a](const motion::AxisEvent& e) {
+      for (const EventListener& l : listeners_) l(a, e);
+    };
+  }
+}
+
+motion::Tick AxisBank::ticks(uint64_t now_us) const {
+  // 4.9152 ticks per microsecond = 3072/625, exact in integers.
+  uint64_t since = now_us >= epoch_us_ ? now_us - epoch_us_ : 0;
+  return static_cast<motion::Tick>(since / 625 * 3072 + since % 625 * 3072 / 625);
+}
+
+void AxisBank::advance(uint64_t now_us) {
+  if (!epoch_set_) {
+    epoch_us_ = now_us;
+    epoch_set_ = true;
+  }
+  now_us_ = now_us;
+  for (auto& axis : axes_) axis->advance_to(ticks(now_us));
+}
+
+void AxisBank::power_up(uint64_t now_us) {
+  advance(now_us);
+  for (auto& axis : axes_) axis->power_up(ticks(now_us));
+}
+
+void AxisBank::master_lost(uint64_t now_us) {
+  advance(now_us);
+  for (auto& axis : axes_) axis->master_lost(ticks(now_us));
+}
+
+}  // namespace stepnode::node

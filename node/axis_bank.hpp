@@ -1,0 +1,55 @@
+// The axes of the device and their back end: one motion::Axis per axis (the pulse engine,
+// position, limits and e-stop guard, and the job that runs) driving the simulated machine,
+// and the clock that turns the node's microseconds into engine ticks. The profiles (Horner
+// registers, HP channels) are front ends on these axes; each listens to the axes' events.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "node/device_objects.hpp"
+#include "node/motion/axis.hpp"
+#include "node/sim/machine.hpp"
+
+namespace stepnode::node {
+
+class AxisBank {
+ public:
+  explicit AxisBank(const DeviceLayout& layout);
+
+  // Every axis up to `now_us` (CLOCK_MONOTONIC or virtual): the steps due are taken.
+  void advance(uint64_t now_us);
+  // Power-up / NMT reset node: every axis back to its power-up state.
+  void power_up(uint64_t now_us);
+  // The master was lost (or can no longer reach the node): every moving axis ramps down,
+  // %I8 latches.
+  void master_lost(uint64_t now_us);
+
+  unsigned count() const { return static_cast<unsigned>(axes_.size()); }
+  motion::Axis& axis(unsigned n) { return *axes_.at(n); }
+  sim::Machine& machine() { return machine_; }
+  // The time of the latest advance (the time a command written now acts at).
+  uint64_t now_us() const { return now_us_; }
+  motion::Tick now() const { return ticks(now_us_); }
+  motion::Tick ticks(uint64_t now_us) const;
+  // The node clock's microsecond of a tick, to the nearest (so micros(ticks(us)) == us).
+  uint64_t micros(motion::Tick t) const {
+    uint64_t u = static_cast<uint64_t>(t);
+    return epoch_us_ + u / 3072 * 625 + (u % 3072 * 625 + 1536) / 3072;
+  }
+
+  // Every axis event (status change, error, move done), to every listener in order.
+  using EventListener = std::function<void(unsigned axis, const motion::AxisEvent& event)>;
+  void listen(EventListener listener) { listeners_.push_back(std::move(listener)); }
+
+ private:
+  sim::Machine machine_;
+  std::vector<std::unique_ptr<motion::Axis>> axes_;
+  std::vector<EventListener> listeners_;
+  uint64_t epoch_us_ = 0;
+  bool epoch_set_ = false;
+  uint64_t now_us_ = 0;
+};
+
+}  // namespace stepnode::node

@@ -1,0 +1,25 @@
+// One profile of the device: the service behind one folder of node/profiles (its objects'
+// reactions, what it publishes, its EMCY codes, its stored settings and its per-tick
+// work). The device assembly (node/device.*) owns the profiles it was configured with and
+// calls them in this order; adding a profile is a new folder and one line there.
+#pragma once
+#include <cstdint>
+
+namespace stepnode::node {
+
+class Profile {
+ public:
+  virtual ~Profile() = default;
+  // Power-up and NMT reset node, with the stored values loaded. configure() gives the axes
+  // and the back end their settings before the axes power up; power_up() comes after.
+  virtual void configure(uint64_t /*now_us*/) {}
+  virtual void power_up(uint64_t /*now_us*/) {}
+  // The axes were advanced to `now_us`: the profile's own timed work.
+  virtual void advance(uint64_t /*now_us*/) {}
+  // Its readings into the dictionary (the TPDOs carry them).
+  virtual void publish() {}
+  // A SYNC (TRIG SYS), received at `frame_us` <= now_us (its arrival on the bus).
+  virtual void sync(uint64_t /*now_us*/, uint64_t /*frame_us*/) {}
+};
+
+}  // namespace stepnode::node
