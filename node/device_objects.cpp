@@ -1,6 +1,9 @@
 #include "node/device_objects.hpp"
 
+#include <cstdio>
+
 #include "node/diagnostic_objects.hpp"
+#include "od/cob_id.hpp"
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/hp44714a/objects.hpp"
 #include "node/profiles/sim/objects.hpp"
@@ -31,6 +34,21 @@ void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout)
   if (layout.hp) hp44714a::add_objects(dictionary, layout.axes);
   // The simulated machine is the back end of every axis.
   sim::add_objects(dictionary, layout.motors());
+  // A PDO no profile of this device maps starts invalid (COB-ID bit 31), as the PDOs of
+  // axes 2-8 do: a master maps and enables it if it wants it.
+  for (unsigned n = 0; n < layout.pdos(); ++n)
+    for (unsigned comm : {0x1400u, 0x1800u}) {
+      const auto map = static_cast<uint16_t>(comm + 0x200 + n);
+      if (dictionary.get<uint8_t>(map, 0) != 0) continue;
+      od::Entry& cob = dictionary.at(static_cast<uint16_t>(comm + n), 1);
+      const uint32_t invalid = od::decode<uint32_t>(cob.default_value) | od::kCobInvalid;
+      cob.default_value = cob.value = od::encode<uint32_t>(invalid);
+      if (!cob.eds_default.empty()) {  // "$NODEID+0x180" (a pre-defined ID): the node id stays symbolic
+        char text[32];
+        std::snprintf(text, sizeof text, "$NODEID+0x%X", static_cast<unsigned>(invalid & ~0x7Fu));
+        cob.eds_default = text;
+      }
+    }
 }
 
 void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout) {

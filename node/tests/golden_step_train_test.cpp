@@ -74,9 +74,16 @@ Train read_train(const std::string& name, std::string& error) {
 
 class GoldenTrains : public NodeHarness {
  protected:
-  void SetUp() override {
-    make(1);
+  void SetUp() override { build(DeviceLayout{.axes = 1}); }
+  // A device with the profiles of `layout` (all of them by default).
+  void build(const DeviceLayout& layout) {
+    NodeOptions o;
+    o.device.node_id = kId;
+    o.layout = layout;
+    o.state_dir = dir.path;
+    make(o);
     nmt(0x01);
+    train.clear();
     device->machine().axes[0].trace_into(&train);
   }
 
@@ -192,6 +199,35 @@ TEST_F(GoldenTrains, HornerHoming) {
 
 TEST_F(GoldenTrains, HpFrequencyRampMoves) {
   // HP manual Figure 3-3: PROFILE FREQ 100 800 200 25E-6, PSCALE 0.1, MOVE 20, MOVE -30.
+  hp_profile(0, 100, 800, 200, 25e-6);
+  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
+  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
+  advance_ms(3000);
+  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, -30), 0u);
+  advance_ms(4000);
+  check("hp_freq_move");
+}
+
+// A device with one profile runs the same engine: the same trains, tick for tick.
+TEST_F(GoldenTrains, HornerTrapezoidOnAHornerOnlyDevice) {
+  build(DeviceLayout{.axes = 1, .hp = false, .user = false});
+  ASSERT_EQ(od().object(hp_obj::index(0, hp_obj::kProfile)), nullptr);
+  command(cmd::kClearErrors);
+  profile_word(horner::profile_sub::kDeceleration, 300);
+  destination(0);
+  command(cmd::kSetPosition);
+  destination(3000);
+  command(cmd::kMoveRelative);
+  advance_ms(5000);
+  destination(-1200);
+  command(cmd::kMoveAbsolute);
+  advance_ms(6000);
+  check("horner_trapezoid");
+}
+
+TEST_F(GoldenTrains, HpFrequencyRampMovesOnAnHpOnlyDevice) {
+  build(DeviceLayout{.axes = 1, .horner = false, .user = false});
+  ASSERT_EQ(od().object(axis_obj::index(0, axis_obj::kCommandBits)), nullptr);
   hp_profile(0, 100, 800, 200, 25e-6);
   ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
   ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);

@@ -125,7 +125,7 @@ class NodeHarness : public ::testing::Test {
     std::vector<CanFrame> out;
     if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
     else client.start_upload(index, sub, od::SdoClient::Mode::Auto, t, out);
-    for (int guard = 0; guard < 64 && !client.done(); ++guard) {
+    for (int guard = 0; guard < 100000 && !client.done(); ++guard) {  // the EDS: thousands of segments
       std::vector<CanFrame> requests;
       requests.swap(out);
       for (const CanFrame& f : requests) {
