@@ -66,33 +66,29 @@ void CanopenNode::install_service_hooks() {
   od::Dictionary& od = dictionary_;
   // Store/restore: the signature check of the dictionary comes first, then the file.
   for (const auto& group : od::kParameterGroups) {
-    od::Entry& save = od.at(0x1010, group.sub);
-    save.validate = [this, check = save.validate, group](std::span<const uint8_t> d) {
-      if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
+    // The signature was checked by the entry's validate (a wrong one is 0x08000020); the
+    // command acts once written. "If the storing failed" the answer is 0x06060000, access
+    // failed due to a hardware error (CiA 301 7.5.2.13), and so for restoring (7.5.2.14).
+    od::react(od.at(0x1010, group.sub), [this, group] {
       spdlog::info("saving {} to {}", group.name, store_.file().string());
-      // A wrong signature is 0x08000020 (checked above); "if the storing failed" the answer
-      // is 0x06060000, access failed due to a hardware error (CiA 301 7.5.2.13).
       return store_.save(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::Hardware;
-    };
-    od::Entry& restore = od.at(0x1011, group.sub);
-    restore.validate = [this, check = restore.validate, group](std::span<const uint8_t> d) {
-      if (od::SdoAbort a = check(d); a != od::SdoAbort::None) return a;
+    });
+    od::react(od.at(0x1011, group.sub), [this, group] {
       spdlog::info("restoring defaults of {} (after the next reset)", group.name);
-      // "If the restoring failed": 0x06060000, as for storing (CiA 301 7.5.2.14).
       return store_.forget(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::Hardware;
-    };
+    });
   }
   for (auto& [index, obj] : od.objects()) {
     (void)obj;
     if (index >= 0x1400 && index <= 0x1BFF)
-      for (auto& [sub, e] : od.object(index)->entries) e.on_written = [this] { pdo_.mark_dirty(); };
+      for (auto& [sub, e] : od.object(index)->entries) od::listen(e, [this] { pdo_.mark_dirty(); });
   }
   // Writing one consumer entry must not reset the others: a lost node's EMCY 0x8130 would
   // stay active for ever, as its slot no longer knew it had timed out.
   for (auto& [sub, e] : od.object(0x1016)->entries)
-    e.on_written = [this] { consumer_.reconfigure(); };
+    od::listen(e, [this] { consumer_.reconfigure(); });
   for (uint16_t index : {0x1005, 0x1006, 0x1019})
-    od.at(index, 0).on_written = [this] { sync_.reset(0); };
+    od::listen(od.at(index, 0), [this] { sync_.reset(0); });
   // 0x1021: the device's own EDS, generated from this dictionary when read.
   od.at(0x1021, 0).on_read = [this](od::Bytes& v) {
     v = od::encode_string(od::write_eds(dictionary_, options_.device));

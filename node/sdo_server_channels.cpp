@@ -17,7 +17,7 @@ SdoServerChannels::SdoServerChannels(od::Dictionary& dictionary, uint64_t timeou
   for (unsigned c = 1; c < od::kSdoServerChannels; ++c) {
     const auto index = static_cast<uint16_t>(od::kSdoServerParameter + c);
     for (uint8_t sub : {od::sdo_param::kCobIdClientToServer, od::sdo_param::kCobIdServerToClient})
-      dictionary_.at(index, sub).on_written = [this] { changed_ = true; };
+      od::listen(dictionary_.at(index, sub), [this] { changed_ = true; });
   }
 }
 

@@ -53,10 +53,10 @@ void add_error_history(Dictionary& od) {
   count.validate = [](std::span<const uint8_t> d) {
     return d[0] == 0 ? SdoAbort::None : SdoAbort::InvalidValue;
   };
-  count.on_written = [&od] {
+  listen(count, [&od] {
     for (unsigned i = 1; i <= kErrorHistoryLength; ++i)
       od.put<uint32_t>(0x1003, static_cast<uint8_t>(i), 0);
-  };
+  });
 }
 
 void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {

@@ -127,10 +127,30 @@ SdoAbort Dictionary::write(uint16_t index, uint8_t sub, std::span<const uint8_t>
   if (e.validate) {
     if (SdoAbort a = e.validate(data); a != SdoAbort::None) return a;
   }
+  Bytes previous = std::move(e.value);
   e.value.assign(data.begin(), data.end());
   // A PDO's reactions run once all its values are in (unpack_pdo), so a command bit in the
   // same PDO as its destination sees the new destination.
-  if (e.on_written && origin != WriteOrigin::Pdo) e.on_written();
+  if (origin == WriteOrigin::Pdo) return SdoAbort::None;
+  return run_reactions(e, previous);
+}
+
+void listen(Entry& entry, std::function<void()> listener) {
+  entry.reactions.push_back([listener = std::move(listener)] {
+    listener();
+    return SdoAbort::None;
+  });
+}
+
+void react(Entry& entry, std::function<SdoAbort()> reaction) { entry.reactions.push_back(std::move(reaction)); }
+
+SdoAbort run_reactions(Entry& entry, const Bytes& previous) {
+  for (const auto& reaction : entry.reactions) {
+    if (SdoAbort a = reaction(); a != SdoAbort::None) {
+      entry.value = previous;
+      return a;
+    }
+  }
   return SdoAbort::None;
 }
 

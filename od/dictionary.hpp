@@ -8,6 +8,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "od/data_type.hpp"
 #include "od/sdo_abort.hpp"
@@ -18,8 +19,8 @@ namespace stepnode::od {
 enum class ObjectCode : uint8_t { Var = 0x07, Array = 0x08, Record = 0x09 };
 
 // Who is writing: a master over SDO, or a received PDO (its entries were checked when
-// mapped). Same rules; for a PDO the on_written reactions are run by unpack_pdo after the
-// whole PDO is stored.
+// mapped). Same rules; for a PDO the reactions are run by unpack_pdo after the whole PDO
+// is stored.
 enum class WriteOrigin : uint8_t { Sdo, Pdo };
 
 struct Entry {
@@ -39,10 +40,14 @@ struct Entry {
   size_t max_length = 0;           // strings and domains: largest accepted length
   Bytes value;
 
-  // Returns an abort code to refuse the write (value range, state, consistency).
+  // Returns an abort code to refuse the write (value range, state, consistency). A check
+  // only: it never acts (the reactions do).
   std::function<SdoAbort(std::span<const uint8_t>)> validate;
-  // Runs after a value was accepted and stored.
-  std::function<void()> on_written;
+  // What the objects' owners do with a value once it is stored (a command is a write), in
+  // the order they were added (listen(), react()); over SDO at once, for a PDO after the
+  // whole PDO is stored. A reaction may refuse: the entry gets its previous value back and,
+  // over SDO, that abort is the answer; the later reactions do not run.
+  std::vector<std::function<SdoAbort()>> reactions;
   // A received PDO carried a value this entry refused (range, validate hook). A PDO has no
   // answer (CiA 301 7.2.2), so the owner of the object decides what the refusal means; it
   // runs before the PDO's on_written reactions.
@@ -54,6 +59,14 @@ struct Entry {
   size_t bit_length() const { return fixed_size(type) * 8; }
   uint32_t mapping_word() const;  // index<<16 | sub<<8 | bits, as in 0x1600/0x1A00
 };
+
+// Adds a reaction that never refuses (a listener: a service noting a changed setting).
+void listen(Entry& entry, std::function<void()> listener);
+// Adds a reaction that may refuse the value (a command the device cannot carry out now).
+void react(Entry& entry, std::function<SdoAbort()> reaction);
+// Runs the entry's reactions on its stored value; on a refusal puts `previous` back and
+// returns the abort.
+SdoAbort run_reactions(Entry& entry, const Bytes& previous);
 
 // Sets an entry's inclusive range, in its own type (a write outside gets 0x0609003x).
 template <class T>
@@ -104,7 +117,7 @@ class Dictionary {
   SdoAbort check_write_access(uint16_t index, uint8_t sub) const;
   ReadResult read(uint16_t index, uint8_t sub);
   // Full CiA 301 write: access, length, range, then the validate hook; stores the value and
-  // runs on_written. Returns the abort code, or None.
+  // (SDO) runs the reactions. Returns the abort code, or None.
   SdoAbort write(uint16_t index, uint8_t sub, std::span<const uint8_t> data,
                  WriteOrigin origin = WriteOrigin::Sdo);
 

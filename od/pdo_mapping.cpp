@@ -91,22 +91,23 @@ SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
   if (data.size() * 8 < mapping_bits(mapping)) return SdoAbort::LengthTooLow;
   size_t offset = 0;
   SdoAbort first = SdoAbort::None;
-  std::vector<Entry*> written;
+  std::vector<std::pair<Entry*, Bytes>> written;  // with the value each had before
   for (const auto& m : mapping) {
     if (!m.dummy()) {
       Bytes value = encode<uint64_t>(read_bits(data, offset, m.bits));
       value.resize((m.bits + 7) / 8);
-      SdoAbort a = dictionary.write(m.index, m.sub, value, WriteOrigin::Pdo);
       Entry* e = dictionary.find(m.index, m.sub);
-      if (a == SdoAbort::None) written.push_back(e);
+      Bytes previous = e ? e->value : Bytes{};
+      SdoAbort a = dictionary.write(m.index, m.sub, value, WriteOrigin::Pdo);
+      if (a == SdoAbort::None) written.emplace_back(e, std::move(previous));
       else if (e && e->on_pdo_refused) e->on_pdo_refused(value, a);
       if (first == SdoAbort::None) first = a;
     }
     offset += m.bits;
   }
-  // Reactions after the whole PDO is in (a command sees the destination sent with it).
-  for (Entry* e : written)
-    if (e->on_written) e->on_written();
+  // Reactions after the whole PDO is in (a command sees the destination sent with it). A
+  // PDO has no answer: a refused command reports itself (its owner's error and EMCY).
+  for (auto& [e, previous] : written) (void)run_reactions(*e, previous);
   return first;
 }
 

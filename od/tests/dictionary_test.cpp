@@ -174,7 +174,7 @@ TEST_F(DictionaryTest, WritingReadOnlyOrConstIs06010002AndChangesNothing) {
   bool validated = false, written = false;
   Entry& ro = od.at(0x2001, 0);
   ro.validate = [&](std::span<const uint8_t>) { validated = true; return SdoAbort::None; };
-  ro.on_written = [&] { written = true; };
+  listen(ro, [&] { written = true; });
   EXPECT_EQ(w(0x2001, 0, encode<uint32_t>(1)), SdoAbort::ReadOnly);
   EXPECT_EQ(static_cast<uint32_t>(SdoAbort::ReadOnly), 0x06010002u);
   EXPECT_EQ(w(0x2002, 0, {1}), SdoAbort::ReadOnly);               // const
@@ -293,7 +293,7 @@ TEST_F(DictionaryTest, CheckValueAlone) {
   EXPECT_EQ(check_value(od.at(0x200A, 0), Bytes(11, 0)), SdoAbort::LengthTooHigh);
 }
 
-// ---- validate and on_written --------------------------------------------------------------
+// ---- validate and reactions --------------------------------------------------------------
 
 TEST_F(DictionaryTest, OrderAccessLengthRangeThenValidateThenStoreThenOnWritten) {
   std::vector<std::string> calls;
@@ -302,7 +302,7 @@ TEST_F(DictionaryTest, OrderAccessLengthRangeThenValidateThenStoreThenOnWritten)
     calls.push_back("validate " + std::to_string(decode<int32_t>(d)));
     return decode<int32_t>(d) == 13 ? SdoAbort::DeviceState : SdoAbort::None;
   };
-  e.on_written = [&] { calls.push_back("written " + std::to_string(od.get<int32_t>(0x2005, 0))); };
+  listen(e, [&] { calls.push_back("written " + std::to_string(od.get<int32_t>(0x2005, 0))); });
   EXPECT_EQ(w(0x2005, 0, Bytes{1}), SdoAbort::LengthTooLow);            // no hook
   EXPECT_EQ(w(0x2005, 0, encode<int32_t>(500)), SdoAbort::ValueTooHigh);  // no hook
   EXPECT_TRUE(calls.empty());
@@ -310,6 +310,22 @@ TEST_F(DictionaryTest, OrderAccessLengthRangeThenValidateThenStoreThenOnWritten)
   EXPECT_EQ(od.get<int32_t>(0x2005, 0), 0);                             // nothing stored
   EXPECT_EQ(w(0x2005, 0, encode<int32_t>(12)), SdoAbort::None);
   EXPECT_EQ(calls, (std::vector<std::string>{"validate 13", "validate 12", "written 12"}));
+}
+
+TEST_F(DictionaryTest, ReactionsRunInOrderAndARefusalRestoresThePreviousValue) {
+  std::vector<std::string> calls;
+  Entry& e = od.at(0x2005, 0);
+  listen(e, [&] { calls.push_back("first sees " + std::to_string(od.get<int32_t>(0x2005, 0))); });
+  // A command the device cannot carry out now: the abort is the answer.
+  react(e, [&] {
+    calls.push_back("command");
+    return od.get<int32_t>(0x2005, 0) == 7 ? SdoAbort::DeviceState : SdoAbort::None;
+  });
+  listen(e, [&] { calls.push_back("third"); });
+  ASSERT_EQ(w(0x2005, 0, encode<int32_t>(5)), SdoAbort::None);
+  EXPECT_EQ(w(0x2005, 0, encode<int32_t>(7)), SdoAbort::DeviceState);
+  EXPECT_EQ(od.get<int32_t>(0x2005, 0), 5);  // the value before the refused write
+  EXPECT_EQ(calls, (std::vector<std::string>{"first sees 5", "command", "third", "first sees 7", "command"}));
 }
 
 TEST_F(DictionaryTest, PdoWritesObeyTheSameRules) {

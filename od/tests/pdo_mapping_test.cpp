@@ -230,11 +230,11 @@ TEST_F(PdoMappingTest, UnpackReportsTheFirstRefusedWriteAndStoresTheOthers) {
 
 TEST_F(PdoMappingTest, ReactionsRunOnceTheWholePdoIsStoredAndOnlyForStoredEntries) {
   std::vector<std::string> calls;
-  od.at(0x2000, 0).on_written = [&] {
+  listen(od.at(0x2000, 0), [&] {
     calls.push_back("u8 sees u32=" + std::to_string(od.get<uint32_t>(0x2002, 0)));
-  };
-  od.at(0x2002, 0).on_written = [&] { calls.push_back("u32"); };
-  od.at(0x200B, 0).on_written = [&] { calls.push_back("limited"); };
+  });
+  listen(od.at(0x2002, 0), [&] { calls.push_back("u32"); });
+  listen(od.at(0x200B, 0), [&] { calls.push_back("limited"); });
   // The command (u8) comes before its argument (u32) in the PDO, yet sees the new argument.
   PdoMapping map{{0x2000, 0, 8}, {0x200B, 0, 8}, {0x2002, 0, 32}};
   EXPECT_EQ(unpack_pdo(od, map, Frame{1, 200, 0x78, 0x56, 0x34, 0x12}), SdoAbort::ValueTooHigh);

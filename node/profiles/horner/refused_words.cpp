@@ -32,10 +32,7 @@ void RefusedWords::watch(od::Entry& entry) {
     refused_[k] = raw;
   };
   // A valid value replaces the refused one; the word's other reactions still run.
-  entry.on_written = [this, k, then = std::move(entry.on_written)] {
-    refused_.erase(k);
-    if (then) then();
-  };
+  od::listen(entry, [this, k] { refused_.erase(k); });
 }
 
 void RefusedWords::overlay(motion::CommandWords& w) const {

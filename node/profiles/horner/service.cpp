@@ -56,13 +56,13 @@ void HornerService::install_hooks() {
   for (unsigned a = 0; a < axes_.count(); ++a) {
     // A command acts at once, with the words as they are now (SPM30 3.4: words may change
     // for the next move as soon as a command was taken).
-    dictionary_.at(index(a, kCommandBits), 0).on_written = [this, a] {
+    od::listen(dictionary_.at(index(a, kCommandBits), 0), [this, a] {
       load_words(a);
       axes_.axis(a).write_commands(dictionary_.get<uint16_t>(index(a, kCommandBits), 0), axes_.now());
       publish(a);
-    };
+    });
     for (auto& [sub, e] : dictionary_.object(index(a, kConfiguration))->entries)
-      if (sub) e.on_written = [this, a] { load_config(a); };
+      if (sub) od::listen(e, [this, a] { load_config(a); });
   }
 }
 

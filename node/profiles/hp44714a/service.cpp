@@ -63,12 +63,15 @@ SdoAbort HpService::result(unsigned a, hp::Error e) {
 void HpService::install_hooks(unsigned a) {
   hp::Channel& ch = *channels_[a];
   od::Dictionary& od = dictionary_;
+  // A command is a write: it acts once the value is stored (for an RPDO, once the whole
+  // PDO is), on the stored value; a refusal puts the previous value back and is the abort.
   auto hook = [&](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
-    od.at(index(a, offset), sub).validate = [this, a, f](std::span<const uint8_t> d) {
-      SdoAbort r = f(d);
+    od::Entry& entry = od.at(index(a, offset), sub);
+    od::react(entry, [this, a, f, &entry] {
+      SdoAbort r = f(entry.value);
       publish(a);
       return r;
-    };
+    });
   };
   // PROFILE: subs 1-5 are staged; writing 1 to sub 6 gives the PROFILE command.
   hook(kProfile, hp44714a::profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
@@ -165,15 +168,13 @@ void HpService::install_hooks(unsigned a) {
     v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);
   };
   uint16_t sim = sim_index(a);
-  od.at(sim, hp44714a::sim_sub::kHaltInputHigh).validate = [this, a, &ch](std::span<const uint8_t> d) {
-    ch.set_halt_input(u8(d) != 0, now());
+  od::listen(od.at(sim, hp44714a::sim_sub::kHaltInputHigh), [this, a, sim, &ch] {
+    ch.set_halt_input(dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kHaltInputHigh) != 0, now());
     publish(a);
-    return SdoAbort::None;
-  };
-  od.at(sim, hp44714a::sim_sub::kTestJumper).validate = [&ch](std::span<const uint8_t> d) {
-    ch.set_test_jumper(u8(d) != 0);
-    return SdoAbort::None;
-  };
+  });
+  od::listen(od.at(sim, hp44714a::sim_sub::kTestJumper), [this, sim, &ch] {
+    ch.set_test_jumper(dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kTestJumper) != 0);
+  });
 }
 
 void HpService::apply_stored(unsigned a, motion::Tick t) {

@@ -50,20 +50,20 @@ void SimService::install_hooks() {
   for (unsigned m = 0; m < machine().axes.size(); ++m) {
     for (uint16_t obj : {sim_obj::kSwitches, sim_obj::kEncoder, sim_obj::kFaults})
       for (auto& [sub, e] : dictionary_.object(sim_obj::index(m, obj))->entries)
-        if (sub) e.on_written = [this, m] {
+        if (sub) od::listen(e, [this, m] {
             load_machine(m);
             axes_.advance(axes_.now_us());  // an input may have changed under a moving axis
-          };
-    dictionary_.at(sim_obj::index(m, sim_obj::kFaults), sim::faults_sub::kDisplace).on_written = [this, m] {
+          });
+    od::listen(dictionary_.at(sim_obj::index(m, sim_obj::kFaults), sim::faults_sub::kDisplace), [this, m] {
       machine().axes[m].displace(dictionary_.get<int32_t>(sim_obj::index(m, sim_obj::kFaults),
                                                          sim::faults_sub::kDisplace));
-      axes_.advance(axes_.now_us());  // an input may have changed under a moving axis
-    };
+      axes_.advance(axes_.now_us());
+    });
   }
-  dictionary_.at(sim_obj::kEmergencyStop, 0).on_written = [this] {
+  od::listen(dictionary_.at(sim_obj::kEmergencyStop, 0), [this] {
     machine().emergency_stop = dictionary_.get<uint8_t>(sim_obj::kEmergencyStop, 0) != 0;
-    axes_.advance(axes_.now_us());  // an input may have changed under a moving axis
-  };
+    axes_.advance(axes_.now_us());
+  });
 }
 
 void SimService::publish_motor(unsigned a) {

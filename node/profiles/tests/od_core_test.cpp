@@ -132,7 +132,7 @@ TEST(PdoPacking, ReactionsRunAfterTheWholePdo) {
   od.var(0x2000, "command", DataType::Unsigned8, Access::ReadWrite, {0}, true);
   od.var(0x2001, "destination", DataType::Unsigned8, Access::ReadWrite, {0}, true);
   uint8_t seen = 0;
-  od.at(0x2000, 0).on_written = [&] { seen = od.get<uint8_t>(0x2001, 0); };
+  listen(od.at(0x2000, 0), [&] { seen = od.get<uint8_t>(0x2001, 0); });
   PdoMapping map{{0x2000, 0, 8}, {0x2001, 0, 8}};
   EXPECT_EQ(unpack_pdo(od, map, std::vector<uint8_t>{1, 42}), SdoAbort::None);
   EXPECT_EQ(seen, 42);
