@@ -15,13 +15,18 @@ int64_t floor_mod(int64_t a, int64_t b) { return a - floor_div(a, b) * b; }
 void AxisMachine::step(motion::Tick time, int direction) {
   ++pulses_;
   last_step_time_ = time;
-  if (trace_) trace_->push_back({time, direction >= 0 ? +1 : -1});
+  if (trace_) [[unlikely]] record(time, direction);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   int64_t next = position_ + (direction >= 0 ? 1 : -1);
   if (config_.stall_above && next > *config_.stall_above) return;  // jammed
   if (config_.stall_below && next < *config_.stall_below) return;
   position_ = next;
+}
+
+// Out of line: the hot path of step() stays as small as it was without a trace.
+__attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction) {
+  trace_->push_back({time, direction >= 0 ? +1 : -1});
 }
 
 int64_t AxisMachine::encoder_counts_per_rev() const {

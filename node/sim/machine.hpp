@@ -83,6 +83,7 @@ class AxisMachine : public motion::MotorPort {
   motion::Tick last_step_time_ = 0;
   bool powered_ = true;
   std::vector<TracedStep>* trace_ = nullptr;
+  void record(motion::Tick time, int direction);
 };
 
 // The whole machine: the axes and the inputs they share.
