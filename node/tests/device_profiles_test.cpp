@@ -22,13 +22,7 @@ constexpr uint32_t kNoObject = 0x06020000;
 class DeviceProfiles : public NodeHarness {
  protected:
   void SetUp() override {}
-  void build(const DeviceLayout& layout) {
-    NodeOptions o;
-    o.device.node_id = kId;
-    o.layout = layout;
-    o.state_dir = dir.path;
-    make(o);
-  }
+  void build(const DeviceLayout& layout) { make(layout); }
   // The manufacturer objects (0x2000-0x5FFF) of the EDS the node serves (0x1021).
   std::set<uint16_t> eds_manufacturer_objects() {
     od::SdoResult r = transfer(false, 0x1021, 0);

@@ -75,13 +75,9 @@ Train read_train(const std::string& name, std::string& error) {
 class GoldenTrains : public NodeHarness {
  protected:
   void SetUp() override { build(DeviceLayout{.axes = 1}); }
-  // A device with the profiles of `layout` (all of them by default).
+  // A device with the profiles of `layout` (all of them by default), operational.
   void build(const DeviceLayout& layout) {
-    NodeOptions o;
-    o.device.node_id = kId;
-    o.layout = layout;
-    o.state_dir = dir.path;
-    make(o);
+    make(layout);
     nmt(0x01);
     train.clear();
     device->machine().axes[0].trace_into(&train);
@@ -126,25 +122,37 @@ class GoldenTrains : public NodeHarness {
     ASSERT_EQ(put(p, hp44714a::profile_sub::kLast, last), 0u);
     ASSERT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kApply, 1), 0u);
   }
+  // Two moves of a Horner trapezoid: relative 3000, then absolute to -1200.
+  void horner_trapezoid() {
+    command(cmd::kClearErrors);
+    profile_word(horner::profile_sub::kDeceleration, 300);
+    destination(0);
+    command(cmd::kSetPosition);  // MOVE ABSOLUTE needs a valid position (SPM30 3.3.1)
+    destination(3000);
+    command(cmd::kMoveRelative);
+    advance_ms(5000);
+    destination(-1200);
+    command(cmd::kMoveAbsolute);
+    advance_ms(6000);
+    ASSERT_EQ(device->machine().axes[0].position(), -1200);
+    check("horner_trapezoid");
+  }
+  // HP manual Figure 3-3: PROFILE FREQ 100 800 200 25E-6, PSCALE 0.1, MOVE 20, MOVE -30.
+  void hp_freq_move() {
+    hp_profile(0, 100, 800, 200, 25e-6);
+    ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
+    ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
+    advance_ms(3000);
+    ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, -30), 0u);
+    advance_ms(4000);
+    check("hp_freq_move");
+  }
   void hp_sustain(double v) { ASSERT_EQ(put(hp_obj::index(0, hp_obj::kSustain), 0, v), 0u); }
 
   Train train;
 };
 
-TEST_F(GoldenTrains, HornerTrapezoid) {
-  command(cmd::kClearErrors);
-  profile_word(horner::profile_sub::kDeceleration, 300);
-  destination(0);
-  command(cmd::kSetPosition);  // MOVE ABSOLUTE needs a valid position (SPM30 3.3.1)
-  destination(3000);
-  command(cmd::kMoveRelative);
-  advance_ms(5000);
-  destination(-1200);
-  command(cmd::kMoveAbsolute);
-  advance_ms(6000);
-  ASSERT_EQ(device->machine().axes[0].position(), -1200);
-  check("horner_trapezoid");
-}
+TEST_F(GoldenTrains, HornerTrapezoid) { horner_trapezoid(); }
 
 TEST_F(GoldenTrains, HornerTriangle) {
   command(cmd::kClearErrors);
@@ -197,44 +205,19 @@ TEST_F(GoldenTrains, HornerHoming) {
   check("horner_homing");
 }
 
-TEST_F(GoldenTrains, HpFrequencyRampMoves) {
-  // HP manual Figure 3-3: PROFILE FREQ 100 800 200 25E-6, PSCALE 0.1, MOVE 20, MOVE -30.
-  hp_profile(0, 100, 800, 200, 25e-6);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
-  advance_ms(3000);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, -30), 0u);
-  advance_ms(4000);
-  check("hp_freq_move");
-}
+TEST_F(GoldenTrains, HpFrequencyRampMoves) { hp_freq_move(); }
 
 // A device with one profile runs the same engine: the same trains, tick for tick.
 TEST_F(GoldenTrains, HornerTrapezoidOnAHornerOnlyDevice) {
   build(DeviceLayout{.axes = 1, .hp = false, .user = false});
   ASSERT_EQ(od().object(hp_obj::index(0, hp_obj::kProfile)), nullptr);
-  command(cmd::kClearErrors);
-  profile_word(horner::profile_sub::kDeceleration, 300);
-  destination(0);
-  command(cmd::kSetPosition);
-  destination(3000);
-  command(cmd::kMoveRelative);
-  advance_ms(5000);
-  destination(-1200);
-  command(cmd::kMoveAbsolute);
-  advance_ms(6000);
-  check("horner_trapezoid");
+  horner_trapezoid();
 }
 
 TEST_F(GoldenTrains, HpFrequencyRampMovesOnAnHpOnlyDevice) {
   build(DeviceLayout{.axes = 1, .horner = false, .user = false});
   ASSERT_EQ(od().object(axis_obj::index(0, axis_obj::kCommandBits)), nullptr);
-  hp_profile(0, 100, 800, 200, 25e-6);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kPscale), 0, 0.1), 0u);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
-  advance_ms(3000);
-  ASSERT_EQ(put(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kRelative, -30), 0u);
-  advance_ms(4000);
-  check("hp_freq_move");
+  hp_freq_move();
 }
 
 TEST_F(GoldenTrains, HpSustainChanges) {

@@ -61,7 +61,15 @@ class NodeHarness : public ::testing::Test {
     o.device.node_id = kId;
     o.layout.axes = axes;
     o.state_dir = dir.path;
-    make(o, defaults);
+    make(o, defaults);  // all profiles
+  }
+  // A device with the profiles and axes of `layout`.
+  void make(const DeviceLayout& layout) {
+    NodeOptions o;
+    o.device.node_id = kId;
+    o.layout = layout;
+    o.state_dir = dir.path;
+    make(o);
   }
   void make(const NodeOptions& o, const Device::ObjectDefaults& defaults = {}) {
     stop();

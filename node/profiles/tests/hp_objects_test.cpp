@@ -43,8 +43,8 @@ TEST(HpObjects, FixedInterfaceTypesAndAccess) {
 }
 
 TEST(HpObjects, EmcyCodesHaveTheManualsWords) {
-  EXPECT_EQ(hp44714a::emcy_text(hp44714a::kErrorEmcyBase + 91), "HP error 91 MUST STOP TO CHANGE DIRECTION");
-  EXPECT_EQ(hp44714a::emcy_text(hp44714a::kInterruptEmcyBase + 3), "HP interrupt: a hard limit stopped pulses");
+  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kErrorEmcyBase + 91), "HP error 91 MUST STOP TO CHANGE DIRECTION");
+  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kInterruptEmcyBase + 3), "HP interrupt: a hard limit stopped pulses");
   EXPECT_EQ(hp44714a::emcy_text(0xFF01), nullptr);  // the Horner axis codes are not the channels'
   EXPECT_EQ(emcy_code_text(0xFF5B), "device specific error");  // od knows no manufacturer codes
 }
