@@ -147,6 +147,17 @@ class SdoProtocolError(SdoAbort):
     """The server's response broke the protocol (client sent the given abort)."""
 
 
+def abort_of(call) -> int:
+    """The abort code a server sent for call(); fails if call() succeeded or the client
+    gave up (a timeout or a protocol error is not the server's answer)."""
+    try:
+        call()
+    except SdoAbort as e:
+        assert e.remote, f"the client gave up, the server sent no abort: {e}"
+        return e.code
+    raise AssertionError("the server answered without an abort")
+
+
 # ---------------------------------------------------------------- helpers
 
 

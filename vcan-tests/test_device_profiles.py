@@ -7,18 +7,9 @@ import struct
 import subprocess
 import time
 
-import pytest
-
-from canopen_master import ABORT_NO_OBJECT, SdoAbort
+from canopen_master import ABORT_NO_OBJECT, abort_of
 
 NODE = 24
-
-
-def abort_of(call):
-    with pytest.raises(SdoAbort) as e:
-        call()
-    assert e.value.remote, f"the client gave up, the server sent no abort: {e.value}"
-    return e.value.code
 
 
 def config(tmp_path, profiles):

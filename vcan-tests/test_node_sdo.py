@@ -7,22 +7,13 @@ import struct
 import subprocess
 import time
 
-import pytest
 
 from canopen_master import (ABORT_DATA_STORE, ABORT_DATA_STORE_STATE, ABORT_NO_OBJECT, ABORT_NO_SUBINDEX,
                             ABORT_NOT_MAPPABLE, ABORT_PDO_LENGTH, ABORT_READ_ONLY, ABORT_TYPE_LENGTH_HIGH,
-                            ABORT_TYPE_LENGTH_LOW, ABORT_VALUE_HIGH, ABORT_VALUE_RANGE, SdoAbort, crc16_ccitt)
+                            ABORT_TYPE_LENGTH_LOW, ABORT_VALUE_HIGH, ABORT_VALUE_RANGE, SdoAbort, abort_of, crc16_ccitt)
 
 NODE = 22
 PRODUCT_CODE = 0x53544550  # "STEP"
-
-
-def abort_of(call):
-    """The abort code a server sent for call()."""
-    with pytest.raises(SdoAbort) as e:
-        call()
-    assert e.value.remote, f"the client gave up, the server sent no abort: {e.value}"
-    return e.value.code
 
 
 # ---------------------------------------------------------------- expedited
