@@ -30,7 +30,14 @@ SocketCan::SocketCan(const std::string& iface, bool receive_own) : iface_(iface)
   if (fd_ < 0) fail(iface, "cannot open a CAN socket (is SocketCAN in this kernel?)");
   unsigned index = ::if_nametoindex(iface.c_str());
   if (index == 0) {
+    // ENODEV: the name is wrong (bad input). Anything else (no descriptor left for the
+    // lookup's own socket) is a runtime failure.
+    int saved = errno;
     ::close(fd_);
+    if (saved != ENODEV) {
+      errno = saved;
+      fail(iface, "if_nametoindex");
+    }
     throw InterfaceError(iface + ": no such CAN interface");
   }
   // An interface of another kind (Ethernet, loopback) would fail at bind with a bare

@@ -64,6 +64,24 @@ def test_bad_input_exits_2_with_one_line(stepnode_bin, tmp_path, bus, case):
     assert bus.recv(timeout=0.2) is None
 
 
+def test_a_runtime_failure_exits_1_with_one_line(stepnode_bin, tmp_path, bus):
+    """Good arguments, but the process runs out of file descriptors: the limit leaves one
+    beyond stdin, stdout and stderr, taken by the CAN socket, so looking the interface up
+    fails. A runtime failure, not bad input ("no such interface"): status 1, one line."""
+    import resource
+
+    def few_descriptors():
+        resource.setrlimit(resource.RLIMIT_NOFILE, (4, 4))
+
+    r = subprocess.run([str(stepnode_bin), "--iface", CHANNEL, "--node-id", "5", "--state-dir", str(tmp_path)],
+                       capture_output=True, text=True, timeout=20, cwd=str(tmp_path), stdin=subprocess.DEVNULL,
+                       preexec_fn=few_descriptors)
+    lines = r.stderr.splitlines()
+    assert r.returncode == 1, f"exit status {r.returncode}, stderr {r.stderr!r}"
+    assert len(lines) == 1 and lines[0].startswith(f"stepnode: {CHANNEL}: "), r.stderr
+    assert bus.recv(timeout=0.2) is None  # no boot-up: the node never came up
+
+
 def test_help_and_print_eds_exit_0(stepnode_bin, tmp_path):
     r = run_node(stepnode_bin, ["--help"], tmp_path)
     assert r.returncode == 0 and "--node-id" in r.stdout and "--iface" in r.stdout
