@@ -76,6 +76,10 @@ def test_a_master_remapping_a_tpdo_mid_run_is_followed(master, start_node, start
     link.pump(2.0, lambda: ax.position_log[-1].encoder == 2000)
     last = ax.position_log[-1]
     assert len(ax.position_log) > frames and (last.motor, last.encoder) == (1000, 2000), last
+    # The bus frame was seen; its DDS sample may still be on its way to the subscriber.
+    cyclone.wait(lambda: any((s.int("motor_position"), s.int("encoder_position")) == (2000, 1000)
+                             for s in cyclone.since(mark, "AxisPosition", NODE, 1)),
+                 what="the final AxisPosition (motor 2000, encoder 1000)")
     got = cyclone.since(mark, "AxisPosition", NODE, 1)
     end = [s for s in got if s.int("motor_position") == 2000][-1]
     assert end.int("encoder_position") == 1000, end.fields
