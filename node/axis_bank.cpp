@@ -7,7 +7,8 @@ AxisBank::AxisBank(const DeviceLayout& layout) {
   for (unsigned a = 0; a < layout.axes; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
     if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
-    axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, motors, &machine_.emergency_stop));
+    cores_.push_back(std::make_unique<motion::AxisCore>(motors, &machine_.emergency_stop));
+    axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, *cores_.back()));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) {
       for (const EventListener& l : listeners_) l(a, e);
     };
@@ -26,11 +27,12 @@ void AxisBank::advance(uint64_t now_us) {
     epoch_set_ = true;
   }
   now_us_ = now_us;
-  for (auto& axis : axes_) axis->advance_to(ticks(now_us));
+  for (auto& core : cores_) core->advance_to(ticks(now_us));
 }
 
 void AxisBank::power_up(uint64_t now_us) {
   advance(now_us);
+  for (auto& core : cores_) core->power_up(ticks(now_us));
   for (auto& axis : axes_) axis->power_up(ticks(now_us));
 }
 

@@ -1,7 +1,8 @@
-// The axes of the device and their back end: one motion::Axis per axis (the pulse engine,
-// position, limits and e-stop guard, and the job that runs) driving the simulated machine,
-// and the clock that turns the node's microseconds into engine ticks. The profiles (Horner
-// registers, HP channels) are front ends on these axes; each listens to the axes' events.
+// The axes of the device and their back end: one motion::AxisCore per axis (the pulse
+// engine, position, e-stop guard, and the job that runs) driving the simulated machine, the
+// Horner front end on each (motion::Axis: the module's status bits report every job), and
+// the clock that turns the node's microseconds into engine ticks. The other front ends (HP
+// channels, CiA 402) are built on the cores by their profiles.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -27,6 +28,7 @@ class AxisBank {
   void master_lost(uint64_t now_us);
 
   unsigned count() const { return static_cast<unsigned>(axes_.size()); }
+  motion::AxisCore& core(unsigned n) { return *cores_.at(n); }
   motion::Axis& axis(unsigned n) { return *axes_.at(n); }
   sim::Machine& machine() { return machine_; }
   // The time of the latest advance (the time a command written now acts at).
@@ -45,6 +47,7 @@ class AxisBank {
 
  private:
   sim::Machine machine_;
+  std::vector<std::unique_ptr<motion::AxisCore>> cores_;
   std::vector<std::unique_ptr<motion::Axis>> axes_;
   std::vector<EventListener> listeners_;
   uint64_t epoch_us_ = 0;

@@ -19,22 +19,34 @@ bool is_set(uint16_t bits, uint16_t bit) { return (bits & bit) != 0; }
 
 }  // namespace
 
-Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop)
-    : config_(config), motors_(std::move(motors)), estop_(estop) {
-  if (motors_.empty()) throw std::invalid_argument("an axis needs at least one motor");
-  saved_.resize(motors_.size());
+Axis::Axis(AxisConfig config, AxisCore& core) : config_(config), core_(core) {
+  saved_.resize(core_.motors());
+  core_.listen(*this, this);
+  set_config(config_);
   power_up(0);
 }
 
+Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop)
+    : config_(config), own_core_(std::make_unique<AxisCore>(std::move(motors), estop)), core_(*own_core_) {
+  saved_.resize(core_.motors());
+  core_.listen(*this, this);
+  set_config(config_);
+  power_up(0);
+}
+
+void Axis::set_config(const AxisConfig& config) {
+  config_ = config;
+  // Another front end's steps matter to the module only for the position check.
+  core_.watch_steps(*this, config_.encoder != EncoderKind::None && config_.encoder_tolerance > 0);
+}
+
 void Axis::power_up(Tick now) {
-  generator_.halt(now);
+  if (own_core_) core_.power_up(now);
   job_ = Job::None;
   errors_ = status::kPowerUp;  // SPM30 3.1: every bit off except %I8
   position_valid_ = false;
   resumable_ = false;
   waiting_for_limit_release_ = false;
-  selected_ = 0;
-  motor_position_ = 0;
   encoder_offset_ = 0;
   encoder_offset_ = -encoder_position();  // encoder position 0 at power-up
   for (auto& s : saved_) s = Saved{};
@@ -48,8 +60,8 @@ bool Axis::origin_active() const {
 
 int32_t Axis::encoder_position() const {
   // The encoder belongs to the first motor (SPM30 3.3.2: axis 1's, whatever is selected).
-  if (config_.encoder == EncoderKind::None) return selected_ == 0 ? motor_position_ : saved_[0].position;
-  int64_t steps = floor_div(motors_[0]->encoder_count() * config_.encoder_multiplier,
+  if (config_.encoder == EncoderKind::None) return core_.selected() == 0 ? core_.position() : saved_[0].position;
+  int64_t steps = floor_div(core_.motor(0).encoder_count() * config_.encoder_multiplier,
                             std::max<int64_t>(config_.encoder_divisor, 1));
   return static_cast<int32_t>(encoder_offset_ + steps);
 }
@@ -58,10 +70,10 @@ uint16_t Axis::status() const {
   uint16_t s = errors_;
   if (position_valid_) s |= status::kPositionValid;
   if (resumable_) s |= status::kResumable;
-  if (selected_ == 1) s |= status::kAxis2Selected;
-  if (selected_ == 2) s |= status::kAxis3Selected;
+  if (core_.selected() == 1) s |= status::kAxis2Selected;
+  if (core_.selected() == 2) s |= status::kAxis3Selected;
   if (origin_active()) s |= status::kAtHome;
-  switch (generator_.phase()) {
+  switch (core_.generator().phase()) {
     case MotionPhase::Accelerating: s |= status::kAccelerating | status::kMoving; break;
     case MotionPhase::Decelerating: s |= status::kDecelerating | status::kMoving; break;
     case MotionPhase::Running:
@@ -79,15 +91,21 @@ void Axis::notify(AxisEvent::Kind kind, uint16_t error_bits) {
   if (on_event) on_event(AxisEvent{kind, s, error_bits});
 }
 
-std::optional<Tick> Axis::next_step_time() { return generator_.peek(); }
-
 void Axis::latch(uint16_t error_bits, Tick now) {
-  // Errors stop motion at once (the heartbeat loss decelerates: see master_lost).
-  if (generator_.moving()) {
-    generator_.halt(now);
-    position_valid_ = false;  // SPM30 3.3.1: a sudden stop invalidates the position
-  }
-  if (job_ == Job::External) end_external(ExternalEnd::Aborted, now);
+  // Errors stop motion at once, whichever front end's job runs (the heartbeat loss
+  // decelerates: see master_lost).
+  const bool was_moving = core_.moving();
+  core_.abort(this, now);
+  latched(error_bits, was_moving);
+}
+
+void Axis::emergency_stop(Tick when, bool was_moving) {
+  (void)when;
+  latched(status::kEmergencyStop, was_moving);
+}
+
+void Axis::latched(uint16_t error_bits, bool was_moving) {
+  if (was_moving) position_valid_ = false;  // SPM30 3.3.1: a sudden stop invalidates the position
   job_ = Job::None;
   waiting_for_limit_release_ = false;
   resumable_ = false;
@@ -107,12 +125,16 @@ std::optional<RampSpec> Axis::ramp_from_words(Tick now, bool index_decel) {
   }
 }
 
-void Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now) {
+bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now) {
   job_direction_ = direction;
-  dir_high_ = direction > 0;  // DIR set at the start of every move (STP100 5.3.5)
-  generator_.start(ramp, now, direction, distance);
+  // DIR is set at the start of every move (STP100 5.3.5), by the core.
+  if (!core_.start(*this, ramp, direction, distance, now)) {
+    job_ = Job::None;  // another front end's job: the command filter keeps this from happening
+    return false;
+  }
   stall_window_steps_ = 0;
   stall_window_encoder_start_ = encoder_position();
+  return true;
 }
 
 void Axis::start_base_run(int direction, Tick now) {
@@ -139,7 +161,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
   }
   int direction = distance > 0 ? +1 : -1;
   job_direction_ = direction;
-  if (estop_ && *estop_) {
+  if (core_.estop_active()) {
     latch(status::kEmergencyStop, now);
     return;
   }
@@ -148,7 +170,8 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     if (config_.limit_started_moves) {
       // STP100 5.3.4: the move starts when the limit input is released.
       waiting_for_limit_release_ = true;
-      dir_high_ = direction > 0;
+      core_.claim(*this, now);
+      core_.set_dir_output(direction > 0);
       return;
     }
     latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
@@ -159,11 +182,11 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
 
 void Axis::select(unsigned index, Tick now) {
   (void)now;
-  if (index == selected_ || index >= motors_.size()) return;  // same or illegal: nothing
-  saved_[selected_] = Saved{motor_position_, position_valid_, origin_active()};
-  selected_ = index;
-  const Saved& s = saved_[selected_];
-  motor_position_ = s.position;
+  if (index == core_.selected() || index >= core_.motors()) return;  // same or illegal: nothing
+  saved_[core_.selected()] = Saved{core_.position(), position_valid_, origin_active()};
+  core_.select(index);
+  const Saved& s = saved_[index];
+  core_.set_position(s.position);
   position_valid_ = s.valid;
   // SPM30 SELECT AXIS step 5: if at-home changed since last selected, the position is
   // no longer trusted.
@@ -171,24 +194,22 @@ void Axis::select(unsigned index, Tick now) {
 }
 
 void Axis::execute(uint16_t bit, Tick now) {
-  const bool moving = generator_.moving() || waiting_for_limit_release_;
   switch (bit) {
     case command::kClearErrors: errors_ = 0; break;
     case command::kImmediateStop:
-      if (moving) {
-        generator_.halt(now);
-        position_valid_ = false;  // SPM30 IMMEDIATE STOP
-      }
+      // Whichever front end's job runs (README: the front ends' arbitration).
+      if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
+      core_.abort(this, now);
       waiting_for_limit_release_ = false;
-      if (job_ == Job::External) end_external(ExternalEnd::Aborted, now);
       job_ = Job::None;
       break;
     case command::kDecelStop:
       if (waiting_for_limit_release_) {
         waiting_for_limit_release_ = false;
+        core_.end_wait(*this);  // the job ends (motion_ended) at the next advance
         resumable_ = true;  // nothing moved yet: the whole move can be resumed
-      } else if (moving) {
-        generator_.stop(now);
+      } else if (core_.moving()) {
+        core_.stop(now);
         // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
         // it must not go on to steps 4-7 when the origin passes during the ramp down.
         if (job_ == Job::Home) job_ = Job::None;
@@ -199,9 +220,9 @@ void Axis::execute(uint16_t bit, Tick now) {
       // command is not possible (Illegal Move) rather than a position the module cannot hold.
       if (words_.destination < kPositionMin || words_.destination > kPositionMax)
         return latch(status::kIllegalMove, now);
-      motor_position_ = words_.destination;
+      core_.set_position(words_.destination);
       // SPM30 4 SET CURRENT POSITION: "(and into ENCODER POSITION if axis 1 is selected)".
-      if (selected_ == 0) encoder_offset_ += words_.destination - encoder_position();
+      if (core_.selected() == 0) encoder_offset_ += words_.destination - encoder_position();
       position_valid_ = true;
       break;
     case command::kSelectAxis1: select(0, now); break;
@@ -221,7 +242,7 @@ void Axis::execute(uint16_t bit, Tick now) {
       move_ramp_ = *ramp;
       origin_inactive_since_.reset();
       int direction = bit == command::kFindHomeUp ? +1 : -1;
-      if (estop_ && *estop_) return latch(status::kEmergencyStop, now);
+      if (core_.estop_active()) return latch(status::kEmergencyStop, now);
       // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
       // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
       // the limit is already reached and the search goes on from step 4.
@@ -229,7 +250,8 @@ void Axis::execute(uint16_t bit, Tick now) {
         if (!config_.limit_qualified_home)
           return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
         job_direction_ = direction;
-        dir_high_ = direction > 0;
+        core_.claim(*this, now);
+        core_.set_dir_output(direction > 0);
         home_event(now, /*at_limit=*/true);
         break;
       }
@@ -241,7 +263,7 @@ void Axis::execute(uint16_t bit, Tick now) {
       auto ramp = ramp_from_words(now);
       if (!ramp) return;
       int direction = bit == command::kJogUp ? +1 : -1;
-      if (estop_ && *estop_) return latch(status::kEmergencyStop, now);
+      if (core_.estop_active()) return latch(status::kEmergencyStop, now);
       if (direction > 0 ? motor().upper_limit() : motor().lower_limit())
         return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
       job_ = Job::Jog;
@@ -270,7 +292,7 @@ void Axis::execute(uint16_t bit, Tick now) {
         index_window_close_ = words_.index_window_close;
       }
       int64_t distance = bit == command::kMoveAbsolute
-                             ? int64_t{words_.destination} - motor_position_
+                             ? int64_t{words_.destination} - core_.position()
                              : int64_t{words_.destination};
       move_repeatable_ = bit != command::kMoveAbsolute;  // STP100 5.3.6
       repeat_distance_ = distance;
@@ -296,18 +318,19 @@ void Axis::write_commands(uint16_t bits, Tick now) {
   previous_commands_ = commands_ = bits;
 
   // Jog is level-sensitive: releasing the bit decelerates and stops (SPM30 JOG).
-  if (job_ == Job::Jog && generator_.moving() &&
+  if (job_ == Job::Jog && core_.moving() &&
       ((job_direction_ > 0 && is_set(falling, command::kJogUp)) ||
        (job_direction_ < 0 && is_set(falling, command::kJogDown))))
-    generator_.stop(now);
+    core_.stop(now);
 
   uint16_t candidates = rising & static_cast<uint16_t>(~command::kRepeatMove);  // %Q12 is a level
   if (!config_.indexed_moves) candidates &= static_cast<uint16_t>(~command::kMoveIndexed);  // future use
-  if (motors_.size() < 2) candidates &= static_cast<uint16_t>(~(command::kSelectAxis2 | command::kSelectAxis3));
-  if (motors_.size() < 3) candidates &= static_cast<uint16_t>(~command::kSelectAxis3);
-  // While an error is latched only Clear Errors is obeyed; while moving only the stops.
+  if (core_.motors() < 2) candidates &= static_cast<uint16_t>(~(command::kSelectAxis2 | command::kSelectAxis3));
+  if (core_.motors() < 3) candidates &= static_cast<uint16_t>(~command::kSelectAxis3);
+  // While an error is latched only Clear Errors is obeyed; while moving (any front end's
+  // job) only the stops.
   if (errors_) candidates &= command::kClearErrors;
-  else if (generator_.moving() || waiting_for_limit_release_)
+  else if (moving())
     candidates &= command::kDecelStop | command::kImmediateStop;
   if (candidates) {
     // Several at once: the highest %Q wins (SPM30 3.2).
@@ -323,22 +346,23 @@ void Axis::master_lost(Tick now) {
   advance_to(now);
   // A lost master must never leave a motor running: ramp down, and latch %I8 so nothing
   // moves again until the master is back and clears it.
-  if (generator_.moving()) generator_.stop(now);
+  if (core_.moving()) core_.stop(now);
   if (job_ == Job::Home) job_ = Job::None;  // ramp down and stop: the search does not go on
   waiting_for_limit_release_ = false;
+  core_.end_wait(*this);
   resumable_ = false;
   errors_ |= status::kPowerUp;
   notify(AxisEvent::Error, status::kPowerUp);
 }
 
 void Axis::check_position_valid() {
-  if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 || selected_ != 0) return;
-  if (std::llabs(int64_t{motor_position_} - encoder_position()) >= config_.encoder_tolerance)
+  if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 || core_.selected() != 0) return;
+  if (std::llabs(int64_t{core_.position()} - encoder_position()) >= config_.encoder_tolerance)
     position_valid_ = false;  // SPM30 5.4: when the difference reaches the tolerance
 }
 
 void Axis::check_stall(const Step& step) {
-  if (!config_.stall_detection || config_.encoder == EncoderKind::None || selected_ != 0) return;
+  if (!config_.stall_detection || config_.encoder == EncoderKind::None || core_.selected() != 0) return;
   // Over a window of commanded steps, the encoder must show at least 10% of the motion
   // (STP100 6.3.3). The window spans several encoder counts, so resolution is no issue.
   int64_t steps_per_count = (config_.encoder_multiplier + config_.encoder_divisor - 1) /
@@ -351,32 +375,30 @@ void Axis::check_stall(const Step& step) {
   if (moved * 10 < window) latch(status::kMotorStalled, step.time);
 }
 
-void Axis::on_step(const Step& step) {
-  if (job_ == Job::External && external_pulse) motor().output_pulse(step.time, external_pulse(step));
-  else motor().step(step.time, step.direction);  // the step sink
-  motor_position_ += step.direction;
-  if (job_ == Job::Move) ++move_done_steps_;
-  if (on_any_step) on_any_step(step);
+void Axis::step_taken(const Step& step) {
+  (void)step;
+  // Another front end's job (the core gives the Horner jobs' steps to after_step): its rules
+  // are its own, but the position check (STP100 6.3.2) is the module's, whoever moves the motor.
+  check_position_valid();
 }
 
-void Axis::start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now) {
-  advance_to(now);
-  job_ = Job::External;
-  resumable_ = false;
-  start_motion(ramp, direction, steps, now);
+void Axis::job_started(const FrontEnd& owner, Tick when) {
+  (void)when;
+  if (&owner == this) return;
+  resumable_ = false;  // another front end moved the axis: nothing left to resume
   notify(AxisEvent::StatusChanged);
 }
 
-void Axis::external_halt(Tick now) {
-  if (job_ != Job::External) return;
-  generator_.halt(now);
-  job_ = Job::None;
+void Axis::job_halted(const FrontEnd& owner, Tick when) {
+  (void)owner;
+  (void)when;
   notify(AxisEvent::StatusChanged);
 }
 
-void Axis::end_external(ExternalEnd how, Tick now) {
-  job_ = Job::None;
-  if (on_external_end) on_external_end(how, now);
+void Axis::aborted(Tick when) {
+  (void)when;
+  job_ = Job::None;  // the e-stop, or another front end's stop (emergency_stop latches %I1)
+  waiting_for_limit_release_ = false;
 }
 
 void Axis::home_event(Tick now, bool at_limit) {
@@ -386,7 +408,7 @@ void Axis::home_event(Tick now, bool at_limit) {
       // Step 3: stop at once on the origin, or (limit-switch-qualified, STP100 3.2.3) on
       // the end limit of the direction of travel.
       if (config_.limit_qualified_home ? !at_limit : !origin) return;
-      generator_.halt(now);
+      core_.halt_motion(now);
       break;
     case HomeStage::BackToOrigin:
       if (origin) {
@@ -400,7 +422,7 @@ void Axis::home_event(Tick now, bool at_limit) {
       return;
     case HomeStage::Approach:
       if (!origin) return;
-      generator_.halt(now);  // step 7: precisely at home
+      core_.halt_motion(now);  // step 7: precisely at home
       break;
   }
   // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach.
@@ -412,26 +434,22 @@ void Axis::home_event(Tick now, bool at_limit) {
     home_stage_ = HomeStage::BackToOrigin;
     origin_inactive_since_.reset();
     start_base_run(-job_direction_, now);
-    job_direction_ = generator_.direction();
+    job_direction_ = core_.generator().direction();
     return;
   }
   // Step 8: the destination becomes motor position, and encoder position "if axis 1 is
   // selected" (SPM30 4 FIND HOME step 7).
-  motor_position_ = words_.destination;
-  if (selected_ == 0) encoder_offset_ += words_.destination - encoder_position();
+  core_.set_position(words_.destination);
+  if (core_.selected() == 0) encoder_offset_ += words_.destination - encoder_position();
   position_valid_ = true;
   job_ = Job::None;
+  core_.release(*this);
   notify(AxisEvent::MoveDone);
 }
 
 void Axis::after_step(const Step& step) {
   Tick t = step.time;
-  if (estop_ && *estop_) return latch(status::kEmergencyStop, t);
-  if (job_ == Job::External) {
-    check_position_valid();
-    if (on_external_step) on_external_step(step);
-    return;
-  }
+  if (job_ == Job::Move) ++move_done_steps_;
   if (step.direction < 0 && motor().lower_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
       return home_event(t, /*at_limit=*/true);
@@ -457,14 +475,15 @@ void Axis::after_step(const Step& step) {
     bool index = motor().index();
     bool became_active = index && !index_was_active_;
     index_was_active_ = index;
-    bool window = generator_.phase() == MotionPhase::Running && generator_.level() >= move_ramp_.run_level &&
+    const StepGenerator& g = core_.generator();
+    bool window = g.phase() == MotionPhase::Running && g.level() >= move_ramp_.run_level &&
                   move_done_steps_ >= int64_t{index_window_open_} &&
                   move_done_steps_ < int64_t{index_window_close_};
     if (window && became_active) {
       index_taken_ = true;
       RampSpec alternate = move_ramp_;
       alternate.decel_ticks_per_level = index_ramp_.decel_ticks_per_level;
-      generator_.retarget(t, index_destination_, alternate);
+      core_.retarget(t, index_destination_, alternate);
       move_target_steps_ = move_done_steps_ + index_destination_;
     }
   }
@@ -473,14 +492,11 @@ void Axis::after_step(const Step& step) {
 void Axis::finish(Tick now) {
   Job job = job_;
   job_ = Job::None;
-  if (job == Job::External) {
-    end_external(ExternalEnd::Completed, now);
-    return notify(AxisEvent::StatusChanged);
-  }
+  if (job == Job::None) return;  // the Home a Decelerate and Stop ended (its ramp just ran out)
   if (job == Job::Home) return notify(AxisEvent::StatusChanged);  // stopped before home
   if (job == Job::Move) {
     if (move_done_steps_ >= move_target_steps_) {
-      if (move_indexed_) dir_high_ = false;  // DIR as move-in-progress (STP100 5.3.5)
+      if (move_indexed_) core_.set_dir_output(false);  // DIR as move-in-progress (STP100 5.3.5)
       notify(AxisEvent::MoveDone);
       // STP100 5.3.6: a relative or indexed move repeats while %Q12 is on.
       if (move_repeatable_ && is_set(commands_, command::kRepeatMove) && !errors_)
@@ -493,61 +509,39 @@ void Axis::finish(Tick now) {
   notify(AxisEvent::MoveDone);
 }
 
-void Axis::advance_to(Tick now) {
-  for (;;) {
-    // SPM30 3.3.1 / STP100 4.2.1: the e-stop input stops motion at once. It is not a function
-    // of the position, so it is looked at before every step (and while a limit-started move
-    // waits): no step goes out once it is active, and %I1 shows as soon as the axis is told.
-    if (estop_ && *estop_ && (generator_.moving() || waiting_for_limit_release_)) {
-      latch(status::kEmergencyStop, now);
-      continue;
-    }
-    if (waiting_for_limit_release_) {
-      bool still = job_direction_ > 0 ? motor().upper_limit() : motor().lower_limit();
-      if (still) break;
-      waiting_for_limit_release_ = false;
-      start_motion(move_ramp_, job_direction_, move_target_steps_ - move_done_steps_, now);
-    }
-    // The 50 ms dwell of FIND HOME step 5 ends between steps at base velocity.
-    std::optional<Tick> deadline;
-    if (job_ == Job::Home && home_stage_ == HomeStage::Clear && origin_inactive_since_)
-      deadline = *origin_inactive_since_ + kOriginDwellTicks;
-    std::optional<Tick> next = generator_.peek();
-    if (!next && generator_.moving()) {
-      // The ramp ends between steps (a stop at base velocity): go idle when it ends.
-      StepGenerator ahead = generator_;
-      Step none;
-      ahead.next(none);
-      if (ahead.marks().end > now) break;
-      generator_.next(none);
-      continue;
-    }
-    if (deadline && *deadline <= now && (!next || *next > *deadline)) {
-      generator_.halt(*deadline);
-      home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin
-      origin_inactive_since_.reset();
-      start_base_run(-job_direction_, *deadline);
-      job_direction_ = generator_.direction();
-      continue;
-    }
-    if (!next || *next > now) {
-      if (!generator_.moving() && job_ != Job::None && !waiting_for_limit_release_) {
-        finish(generator_.time());
-        continue;
-      }
-      break;
-    }
-    // FIND HOME step 4 ends when the origin is active again; that includes before the first
-    // step back (still on it after the stop) and after the load was moved by hand.
-    if (job_ == Job::Home && home_stage_ == HomeStage::BackToOrigin && origin_active()) {
-      home_stage_ = HomeStage::Clear;
-      origin_inactive_since_.reset();
-    }
-    Step step;
-    generator_.next(step);
-    on_step(step);
-    after_step(step);
+void Axis::poll(Tick now) {
+  bool still = job_direction_ > 0 ? motor().upper_limit() : motor().lower_limit();
+  if (still) return;
+  waiting_for_limit_release_ = false;
+  start_motion(move_ramp_, job_direction_, move_target_steps_ - move_done_steps_, now);
+}
+
+std::optional<Tick> Axis::deadline() const {
+  // The 50 ms dwell of FIND HOME step 5 ends between steps at base velocity.
+  if (job_ == Job::Home && home_stage_ == HomeStage::Clear && origin_inactive_since_)
+    return *origin_inactive_since_ + kOriginDwellTicks;
+  return std::nullopt;
+}
+
+void Axis::at_deadline(Tick when) {
+  core_.halt_motion(when);
+  home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin
+  origin_inactive_since_.reset();
+  start_base_run(-job_direction_, when);
+  job_direction_ = core_.generator().direction();
+}
+
+void Axis::before_step() {
+  // FIND HOME step 4 ends when the origin is active again; that includes before the first
+  // step back (still on it after the stop) and after the load was moved by hand.
+  if (job_ == Job::Home && home_stage_ == HomeStage::BackToOrigin && origin_active()) {
+    home_stage_ = HomeStage::Clear;
+    origin_inactive_since_.reset();
   }
+}
+
+void Axis::advanced(Tick now) {
+  (void)now;
   // STP100 6.3.2: motor and encoder positions are compared continuously, so an external force
   // on a standing motor (SPM30 5.4 item 6) turns %I9 off too, not only a step.
   check_position_valid();

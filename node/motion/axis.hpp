@@ -1,12 +1,15 @@
-// One axis of the Horner module: every command bit and status bit with its rules
-// (SPM30 chapters 3-5, STP100 chapters 4-6, STP113 appendix C), driving the pulse engine
-// and a simulated (or real) machine. Pure and deterministic: time comes in as ticks.
+// The Horner front end of one axis: every command bit and status bit of the module with its
+// rules (SPM30 chapters 3-5, STP100 chapters 4-6, STP113 appendix C), driving the axis'
+// motion core (node/motion/axis_core.hpp) and reporting every job's motion in its status
+// bits, whichever front end runs it. Pure and deterministic: time comes in as ticks.
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "node/motion/axis_core.hpp"
 #include "node/motion/axis_registers.hpp"
 #include "node/motion/encoder_kind.hpp"
 #include "node/motion/motor_port.hpp"
@@ -37,13 +40,21 @@ struct AxisEvent {
   uint16_t error_bits;  // for Error: the bits that just latched
 };
 
-class Axis {
+class Axis final : public FrontEnd, public AxisListener {
  public:
-  // `motors`: where steps go and inputs come from (the simulated machine or hardware): one,
-  // or three for an SPM30 multiplexed axis. `estop` is the e-stop input.
+  // On a motion core shared with other front ends (the device's axes).
+  Axis(AxisConfig config, AxisCore& core);
+  // On a core of its own: `motors` (one, or three for an SPM30 multiplexed axis) and the
+  // e-stop input `estop`.
   Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop);
+  Axis(const Axis&) = delete;
+  Axis& operator=(const Axis&) = delete;
 
-  // Power-up or watchdog reset (also NMT reset node): everything off, %I8 on.
+  AxisCore& core() { return core_; }
+  const AxisCore& core() const { return core_; }
+
+  // Power-up or watchdog reset (also NMT reset node): everything off, %I8 on. The core is
+  // powered up by its owner (or here, for an axis with a core of its own).
   void power_up(Tick now);
   // The command bits as the master last wrote them; edges act at once (after advancing
   // the axis to `now`).
@@ -52,83 +63,70 @@ class Axis {
   const CommandWords& words() const { return words_; }
 
   // Takes every step due up to `now` and reacts to the inputs they change.
-  void advance_to(Tick now);
+  void advance_to(Tick now) { core_.advance_to(now); }
   // The master was lost (heartbeat consumer timeout): decelerate and latch %I8.
   void master_lost(Tick now);
 
   uint16_t status() const;
-  int32_t motor_position() const { return motor_position_; }
+  int32_t motor_position() const { return core_.position(); }
   int32_t encoder_position() const;
-  double velocity() const { return generator_.velocity(); }
-  MotionPhase phase() const { return generator_.phase(); }
-  bool dir_output_high() const { return dir_high_; }  // DIR+ level (STP100 5.3.5)
-  unsigned selected_motor() const { return selected_; }
-  std::optional<Tick> next_step_time();
+  double velocity() const { return core_.generator().velocity(); }
+  MotionPhase phase() const { return core_.generator().phase(); }
+  bool dir_output_high() const { return core_.dir_output_high(); }  // DIR+ level (STP100 5.3.5)
+  unsigned selected_motor() const { return core_.selected(); }
+  std::optional<Tick> next_step_time() { return core_.next_step_time(); }
 
   const AxisConfig& config() const { return config_; }
-  void set_config(const AxisConfig& config) { config_ = config; }
+  void set_config(const AxisConfig& config);
   std::function<void(const AxisEvent&)> on_event;
 
-  // Another front end's job (the HP 44714A channel, node/motion/hp_channel.*): the axis
-  // runs the same generator on the same position and motor, and leaves the rules to the
-  // front end. Limits are the front end's (HP HARDLIM has its own senses and outcome); the
-  // e-stop, and the Horner stops (%Q15/%Q16), still end it.
-  enum class ExternalEnd { Completed, Aborted };
-  bool busy() const { return job_ != Job::None || generator_.moving() || waiting_for_limit_release_; }
-  bool external_job() const { return job_ == Job::External; }
-  void start_external(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
-  void external_velocity(Tick now, int64_t level, std::optional<RampSpec> then = std::nullopt) {
-    generator_.change_velocity(now, level, std::move(then));
-  }
-  void external_regrid(Tick now, const RampSpec& ramp) { generator_.regrid(now, ramp); }
-  void external_stop(Tick now) { generator_.stop(now); }
-  void external_halt(Tick now);  // no ramp, no end report: the front end knows why
-  const StepGenerator& generator() const { return generator_; }
-  // Every step of an external job, after the motor took it (the front end may halt here).
-  std::function<void(const Step&)> on_external_step;
-  // The external job ended by itself (Completed) or by the e-stop or a Horner stop.
-  std::function<void(ExternalEnd, Tick)> on_external_end;
-  // Set by the front end: how an external job's step leaves the outputs (PULSE SD|SS).
-  std::function<OutputPulse(const Step&)> external_pulse;
-  // Every step of any job (the HP quadrature index and first-step time watch them).
-  std::function<void(const Step&)> on_any_step;
+  // FrontEnd: the Horner jobs' rules.
+  Hooks hooks() const override { return {.deadline = job_ == Job::Home, .before_step = job_ == Job::Home}; }
+  void poll(Tick now) override;
+  std::optional<Tick> deadline() const override;
+  void at_deadline(Tick when) override;
+  void before_step() override;
+  void after_step(const Step& step) override;
+  void motion_ended(Tick when) override { finish(when); }
+  void aborted(Tick when) override;
+  // AxisListener: every job's motion shows in the status bits (and latches %I1).
+  void step_taken(const Step& step) override;
+  void job_started(const FrontEnd& owner, Tick when) override;
+  void job_halted(const FrontEnd& owner, Tick when) override;
+  void emergency_stop(Tick when, bool was_moving) override;
+  void advanced(Tick now) override;
 
  private:
-  enum class Job { None, Jog, Move, Home, External };
+  enum class Job { None, Jog, Move, Home };
   enum class HomeStage { Seek, BackToOrigin, Clear, Approach };
 
-  MotorPort& motor() { return *motors_[selected_]; }
-  const MotorPort& motor() const { return *motors_[selected_]; }
+  MotorPort& motor() { return core_.motor(); }
+  const MotorPort& motor() const { return core_.motor(); }
   bool origin_active() const;
   void execute(uint16_t command_bit, Tick now);
   void latch(uint16_t error_bits, Tick now);
+  void latched(uint16_t error_bits, bool was_moving);
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);
   std::optional<RampSpec> ramp_from_words(Tick now, bool index_decel = false);
   void start_move(int64_t distance, const RampSpec& ramp, Tick now, bool indexed, bool resume = false);
-  void start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now);
+  bool start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now);
   void start_base_run(int direction, Tick now);
-  void on_step(const Step& step);
-  void after_step(const Step& step);
   void finish(Tick now);
-  void end_external(ExternalEnd how, Tick now);
+  bool moving() const { return core_.moving() || waiting_for_limit_release_; }
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);
   void select(unsigned motor, Tick now);
 
   AxisConfig config_;
-  std::vector<MotorPort*> motors_;
-  const bool* estop_;
+  std::unique_ptr<AxisCore> own_core_;  // only for an axis on a core of its own
+  AxisCore& core_;
   CommandWords words_;
-  StepGenerator generator_;
   uint16_t previous_commands_ = 0;
   uint16_t commands_ = 0;
   uint16_t errors_ = 0;
   bool position_valid_ = false;
   bool resumable_ = false;
-  bool dir_high_ = false;
-  unsigned selected_ = 0;
-  int32_t motor_position_ = 0;
   int64_t encoder_offset_ = 0;  // encoder position = offset + counts * mlt / div
   uint16_t last_status_ = 0;
 

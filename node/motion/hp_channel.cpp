@@ -12,31 +12,38 @@ Tick seconds_to_ticks(double s) { return static_cast<Tick>(std::llround(s * stat
 
 }  // namespace
 
-Channel::Channel(Axis& axis, const MotorPort& inputs) : axis_(axis), inputs_(inputs) {
-  axis_.on_external_step = [this](const Step& s) { on_step(s); };
-  axis_.on_external_end = [this](Axis::ExternalEnd how, Tick at) { on_axis_end(how, at); };
-  axis_.external_pulse = [this](const Step& s) {
-    // PULSE SD|SS: the output the pulse appears at and the levels (3-7, Figure 3-1).
-    last_pulse_ = pulse_for(pulse_, s.direction);
-    ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
-    OutputPulse out;
-    out.step_direction = pulse_.mode == PulseMode::StepDirection;
-    out.on_ndir = last_pulse_.output == Output::Ndir;
-    out.ndir_level = last_pulse_.ndir_level;
-    out.ndir_positive_level = pulse_.ndir_high;
-    out.pstp_level = last_pulse_.pstp_level;
-    return out;
-  };
-  axis_.on_any_step = [this](const Step&) {
-    // QINDEX ONCE: counting begins on the leading edge of the first index pulse (3-21).
-    bool m = inputs_.marker();
-    if (m && !marker_was_ && q_waiting_for_index_) {
-      q_offset_ = inputs_.encoder_count();
-      q_waiting_for_index_ = q_frozen_ = false;
-    }
-    marker_was_ = m;
-  };
+Channel::Channel(AxisCore& core, const MotorPort& inputs) : core_(core), inputs_(inputs) {
+  core_.listen(*this);
   power_up(0);
+}
+
+OutputPulse Channel::pulse(const Step& s) {
+  // PULSE SD|SS: the output the pulse appears at and the levels (3-7, Figure 3-1).
+  last_pulse_ = pulse_for(pulse_, s.direction);
+  ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
+  OutputPulse out;
+  out.step_direction = pulse_.mode == PulseMode::StepDirection;
+  out.on_ndir = last_pulse_.output == Output::Ndir;
+  out.ndir_level = last_pulse_.ndir_level;
+  out.ndir_positive_level = pulse_.ndir_high;
+  out.pstp_level = last_pulse_.pstp_level;
+  return out;
+}
+
+void Channel::step_taken(const Step&) {
+  // QINDEX ONCE: counting begins on the leading edge of the first index pulse (3-21).
+  bool m = inputs_.marker();
+  if (m && !marker_was_ && q_waiting_for_index_) {
+    q_offset_ = inputs_.encoder_count();
+    q_waiting_for_index_ = q_frozen_ = false;
+  }
+  marker_was_ = m;
+  core_.watch_steps(*this, q_waiting_for_index_);
+}
+
+void Channel::start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at) {
+  core_.advance_to(at);
+  core_.start(*this, ramp, direction, steps, at);
 }
 
 void Channel::power_up(Tick now) {
@@ -69,6 +76,7 @@ void Channel::power_up(Tick now) {
   q_offset_ = inputs_.encoder_count();
   q_waiting_for_index_ = q_frozen_ = false;
   marker_was_ = inputs_.marker();
+  core_.watch_steps(*this, false);
 }
 
 Error Channel::accept(Error e) {
@@ -80,7 +88,7 @@ Error Channel::accept(Error e) {
 
 Conflict Channel::profile(const Profile& given, Tick now, Error* error) {
   (void)now;
-  Error e = (blocking_ || run_ != Run::Idle || start_at_ || axis_.busy()) ? Error::AccessoryBusy : Error::None;
+  Error e = (blocking_ || run_ != Run::Idle || start_at_ || core_.busy()) ? Error::AccessoryBusy : Error::None;
   if (error) *error = accept(e);
   if (e != Error::None) return Conflict::None;
   // "The scale factor of the PSCALE command affects the PROFILE ... commands" (3-9): FREQ
@@ -98,14 +106,14 @@ Conflict Channel::profile(const Profile& given, Tick now, Error* error) {
 }
 
 Error Channel::pscale(double units_per_step) {
-  if (blocking_ || run_ != Run::Idle || axis_.busy()) return accept(Error::AccessoryBusy);
-  position_.set_scale(units_per_step, axis_.motor_position());
+  if (blocking_ || run_ != Run::Idle || core_.busy()) return accept(Error::AccessoryBusy);
+  position_.set_scale(units_per_step, core_.position());
   return accept(Error::None);
 }
 
 Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
   if (blocking_) return accept(Error::AccessoryBusy);
-  bool moving = run_ != Run::Idle || start_at_ || axis_.busy();
+  bool moving = run_ != Run::Idle || start_at_ || core_.busy();
   if (mode == StandbyMode::On && moving) return accept(Error::AccessoryBusy);  // power off under a move
   standby_ = mode;
   standby_high_ = sense_high;
@@ -118,7 +126,7 @@ Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
 void Channel::halt_mode(HaltMode mode, Tick now) {
   halt_mode_ = mode;
   if (halt_active() && (run_ != Run::Idle || start_at_)) {
-    axis_.external_halt(now);
+    core_.halt(*this, now);
     end(Done::Halted, intr::kHaltSwitch, now);
   }
 }
@@ -134,9 +142,9 @@ Error Channel::check_can_move(bool width_allowed) const {
 
 Error Channel::move(double distance, bool absolute, bool nowait, Tick now) {
   // 89 first: a move in progress (this channel's, or the axis' under the Horner registers).
-  if (blocking_ || run_ != Run::Idle || start_at_ || axis_.busy()) return accept(Error::AccessoryBusy);
+  if (blocking_ || run_ != Run::Idle || start_at_ || core_.busy()) return accept(Error::AccessoryBusy);
   if (Error e = check_can_move(false); e != Error::None) return accept(e);
-  int64_t steps = absolute ? position_.abs_steps(distance, axis_.motor_position()) : position_.rel_steps(distance);
+  int64_t steps = absolute ? position_.abs_steps(distance, core_.position()) : position_.rel_steps(distance);
   // A move that would outlast the engine's 64-bit clock (2^31 pulses at a 2.5 µHz maximum:
   // 27 million years) is refused: its deceleration tick overflowed.
   if (std::fabs(static_cast<double>(steps)) / std::max(profile_.max, kRateResolutionHz) > kLongestMoveS)
@@ -146,7 +154,7 @@ Error Channel::move(double distance, bool absolute, bool nowait, Tick now) {
 
 Error Channel::sustain(double value, bool nowait, Tick now) {
   if (blocking_ || run_ == Run::Move || run_ == Run::SustainStopping || (start_at_ && pending_.action == Action::Move) ||
-      (axis_.busy() && !axis_.external_job()))
+      (core_.busy() && !core_.owned_by(*this)))
     return accept(Error::AccessoryBusy);
   if (value != 0)
     if (Error e = check_can_move(true); e != Error::None) return accept(e);
@@ -235,7 +243,7 @@ void Channel::start(Tick at) {
 }
 
 void Channel::start_move_steps(int64_t steps, Tick at) {
-  if (axis_.busy()) {  // the Horner registers started a move during the DELAY
+  if (core_.busy()) {  // the Horner registers started a move during the DELAY
     accept(Error::AccessoryBusy);
     return;
   }
@@ -248,7 +256,7 @@ void Channel::start_move_steps(int64_t steps, Tick at) {
   move_steps_ = std::llabs(steps);
   steps_taken_ = 0;
   awaiting_first_step_ = true;
-  axis_.start_external(freq_ramp(profile_, profile_.max), dir, move_steps_, at);
+  start_job(freq_ramp(profile_, profile_.max), dir, move_steps_, at);
 }
 
 void Channel::start_sustain_rate(double rate, Tick at) {
@@ -263,7 +271,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_since_ = at;
       width_target_ = profile_.min;
     } else {
-      axis_.external_stop(at);
+      core_.stop(at);
     }
     return;
   }
@@ -285,7 +293,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
     }
     return;
   }
-  if (axis_.busy()) {
+  if (core_.busy()) {
     accept(Error::AccessoryBusy);
     return;
   }
@@ -300,40 +308,40 @@ void Channel::start_sustain_rate(double rate, Tick at) {
     width_from_ = profile_.min;
     width_since_ = at;
     width_target_ = target;
-    axis_.start_external(constant_rate(1.0 / profile_.last), dir, std::nullopt, at);
+    start_job(constant_rate(1.0 / profile_.last), dir, std::nullopt, at);
   } else {
     sustain_rate_ = target;
-    axis_.start_external(freq_ramp(profile_, target), dir, std::nullopt, at);
+    start_job(freq_ramp(profile_, target), dir, std::nullopt, at);
   }
 }
 
 void Channel::change_sustain_velocity(double target, Tick at) {
   // The running ramp's levels were sized for the first SUSTAIN rate.
   const RampSpec fresh = freq_ramp(profile_, target);
-  const RampSpec& running = axis_.generator().ramp();
+  const RampSpec& running = core_.generator().ramp();
   // Much finer than a ramp made for the new rate (SUSTAIN 2.5E-6, then SUSTAIN 100: 4e7
   // levels of one tick each, minutes of CPU): move to the new rate's grid, then ramp.
   if (running.phase_per_step > 16 * fresh.phase_per_step) {
-    axis_.external_regrid(at, fresh);
-    return axis_.external_velocity(at, fresh.run_level);
+    core_.regrid(at, fresh);
+    return core_.change_velocity(at, fresh.run_level);
   }
   // A level of the running grid within appendix A's 0.01 % of the rate: ramp to it.
   const double level_hz = running.velocity_of(1);
   const int64_t nearest = level_of(running, target);
   if (nearest >= 1 && std::fabs(running.velocity_of(nearest) - target) <= 1e-4 * target)
-    return axis_.external_velocity(at, nearest);
+    return core_.change_velocity(at, nearest);
   // Otherwise (a coarse grid: at 1 MHz/s a level is 13 Hz) ramp on it to the last level
   // short of the rate, then hold the rate exactly on the new rate's grid.
-  const double current = axis_.generator().velocity();
+  const double current = core_.generator().velocity();
   const double levels = target / level_hz;
   const int64_t approach = std::max<int64_t>(1, static_cast<int64_t>(target < current ? std::ceil(levels) : std::floor(levels)));
-  axis_.external_velocity(at, approach, fresh);
+  core_.change_velocity(at, approach, fresh);
 }
 
 void Channel::halt_sgl(Tick now) {
   // "The pulse output can be immediately stopped by sending a HALT command with the SGL mode".
   if (run_ == Run::Idle && !start_at_) return;
-  axis_.external_halt(now);
+  core_.halt(*this, now);
   start_at_.reset();
   end(Done::Halted, intr::kHaltSgl, now);
 }
@@ -383,12 +391,12 @@ bool Channel::limit_active(int direction) const {
 void Channel::set_halt_input(bool level_high, Tick now) {
   halt_level_high_ = level_high;
   if (halt_active() && (run_ != Run::Idle || start_at_)) {
-    axis_.external_halt(now);
+    core_.halt(*this, now);
     end(Done::Halted, intr::kHaltSwitch, now);
   }
 }
 
-void Channel::on_step(const Step& step) {
+void Channel::after_step(const Step& step) {
   if (awaiting_first_step_) {
     first_step_ = step.time;
     awaiting_first_step_ = false;
@@ -396,19 +404,19 @@ void Channel::on_step(const Step& step) {
   if (run_ == Run::Move) ++steps_taken_;
   if (limit_active(step.direction)) {
     // "A hardlimit is reached causing pulses to stop": no step goes past it.
-    axis_.external_halt(step.time);
+    core_.halt(*this, step.time);
     return end(Done::HardLimit, intr::kHardLimit, step.time);
   }
   check_sustain_reached(step.time);
 }
 
-void Channel::on_axis_end(Axis::ExternalEnd how, Tick at) {
+void Channel::ended(bool completed, Tick at) {
   if (run_ == Run::Idle) return;
   if (run_ == Run::Move) {
-    bool all = how == Axis::ExternalEnd::Completed && steps_taken_ >= move_steps_;
+    bool all = completed && steps_taken_ >= move_steps_;
     return end(all ? Done::Completed : Done::Halted, all ? intr::kMoveDone : intr::kHaltSwitch, at);
   }
-  if (run_ == Run::SustainStopping && how == Axis::ExternalEnd::Completed)
+  if (run_ == Run::SustainStopping && completed)
     return end(Done::Completed, intr::kMoveDone, at);
   // A running SUSTAIN ended by the e-stop, a Horner stop or a lost master: a halt.
   end(Done::Halted, intr::kHaltSwitch, at);
@@ -416,7 +424,7 @@ void Channel::on_axis_end(Axis::ExternalEnd how, Tick at) {
 
 void Channel::check_sustain_reached(Tick at) {
   if (run_ != Run::Sustain || sustain_reached_ || profile_.mode != ProfileMode::Freq) return;
-  MotionPhase ph = axis_.generator().phase();
+  MotionPhase ph = core_.generator().phase();
   if (ph == MotionPhase::Running || ph == MotionPhase::Creeping) {
     sustain_reached_ = true;
     blocking_ = false;
@@ -432,7 +440,7 @@ double Channel::current_width_at(Tick t) const {
   return std::max(width_target_, width_from_ - change);
 }
 
-double Channel::current_width() const { return current_width_at(axis_.generator().time()); }
+double Channel::current_width() const { return current_width_at(core_.generator().time()); }
 
 void Channel::width_advance(Tick now) {
   if (profile_.mode != ProfileMode::Width || (run_ != Run::Sustain && run_ != Run::SustainStopping)) return;
@@ -441,9 +449,9 @@ void Channel::width_advance(Tick now) {
   double span = std::fabs(width_target_ - width_from_);
   Tick reach = width_since_ + (profile_.slope > 0 ? seconds_to_ticks(span / profile_.slope) : 0);
   if (reach > now) return;
-  axis_.advance_to(reach);
+  core_.advance_to(reach);
   if (run_ == Run::SustainStopping) {
-    axis_.external_halt(reach);
+    core_.halt(*this, reach);
     return end(Done::Completed, intr::kMoveDone, reach);
   }
   sustain_reached_ = true;
@@ -454,11 +462,11 @@ void Channel::width_advance(Tick now) {
 void Channel::advance(Tick now) {
   if (start_at_ && *start_at_ <= now) start(*start_at_);
   width_advance(now);
-  axis_.advance_to(now);
+  core_.advance_to(now);
   check_sustain_reached(now);
   // STANDBY AUTO follows the axis, whichever front end moves it.
   if (standby_ == StandbyMode::Auto) {
-    if (axis_.busy() || run_ != Run::Idle || start_at_) {
+    if (core_.busy() || run_ != Run::Idle || start_at_) {
       powered_ = true;
       idle_since_.reset();
     } else if (powered_) {
@@ -473,13 +481,13 @@ Done Channel::done() const {
   if (armed_) return Done::WaitingForTrigger;
   if (start_at_ || run_ == Run::Move || run_ == Run::SustainStopping) return Done::Running;
   if (run_ == Run::Sustain) return sustain_reached_ ? Done::SustainRunning : Done::Running;
-  if (axis_.busy()) return Done::Running;  // a Horner job on the same axis
+  if (core_.busy()) return Done::Running;  // a Horner job on the same axis
   return outcome_;
 }
 
 Error Channel::pos(double units) {
-  if (blocking_ || run_ != Run::Idle || axis_.busy()) return accept(Error::AccessoryBusy);
-  position_.load(units, axis_.motor_position());
+  if (blocking_ || run_ != Run::Idle || core_.busy()) return accept(Error::AccessoryBusy);
+  position_.load(units, core_.position());
   return accept(Error::None);
 }
 
@@ -501,6 +509,8 @@ void Channel::qindex(QIndexMode mode) {
       mode = QIndexMode::Off;
       break;
   }
+  // QINDEX ONCE watches every step (whoever moves the axis) for the index's leading edge.
+  core_.watch_steps(*this, q_waiting_for_index_);
   qindex_ = mode;
 }
 

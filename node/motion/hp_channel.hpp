@@ -1,15 +1,15 @@
 // One HP 44714A channel (HP 3852A HP 44714A manual, chapter 3) on one axis of the node: the
 // manual's commands with their rules, DONE? codes, error numbers 89-94, triggers, DELAY,
-// STANDBY, HALT/HARDLIM and the quadrature counter. It drives the same Axis (generator,
-// position, motor) as the Horner register model, through the axis' external-job interface;
-// which semantics apply is decided by which front end a command came through.
+// STANDBY, HALT/HARDLIM and the quadrature counter. It is a front end of the axis' motion
+// core (node/motion/axis_core.hpp), the same generator, position and motor as the Horner
+// registers; which semantics apply is decided by which front end a command came through.
 // Pure and deterministic: time comes in as ticks.
 #pragma once
 #include <cstdint>
 #include <functional>
 #include <optional>
 
-#include "node/motion/axis.hpp"
+#include "node/motion/axis_core.hpp"
 #include "node/motion/hp_position.hpp"
 #include "node/motion/hp_profile.hpp"
 #include "node/motion/hp_pulse_output.hpp"
@@ -18,11 +18,13 @@
 
 namespace stepnode::motion::hp {
 
-class Channel {
+class Channel final : public FrontEnd, public AxisListener {
  public:
-  // `axis`: the axis this channel drives. `inputs`: its motor's inputs (limits, marker,
+  // `core`: the axis this channel drives. `inputs`: its motor's inputs (limits, marker,
   // encoder counts) as the HP terminal module sees them.
-  Channel(Axis& axis, const MotorPort& inputs);
+  Channel(AxisCore& core, const MotorPort& inputs);
+  Channel(const Channel&) = delete;
+  Channel& operator=(const Channel&) = delete;
 
   // Power-on / reset state (3-2): every setting to its power-on value, interrupts disabled.
   void power_up(Tick now);
@@ -42,7 +44,7 @@ class Channel {
   void halt_sgl(Tick now);
   // ---- position and quadrature counter
   Error pos(double units);
-  double pos_query() const { return position_.units(axis_.motor_position()); }
+  double pos_query() const { return position_.units(core_.position()); }
   void qscale(double units_per_count) { qscale_ = units_per_count; }
   void qindex(QIndexMode mode);
   int32_t quadrature_count() const;
@@ -118,13 +120,21 @@ class Channel {
   void interrupt(uint8_t event, Tick at);
   bool limit_active(int direction) const;
   bool halt_active() const;
-  void on_step(const Step& step);
-  void on_axis_end(Axis::ExternalEnd how, Tick at);
+  // FrontEnd: the channel's own jobs.
+  Hooks hooks() const override { return {.pulse = true}; }
+  OutputPulse pulse(const Step& step) override;
+  void after_step(const Step& step) override;
+  void motion_ended(Tick when) override { ended(/*completed=*/true, when); }
+  void aborted(Tick when) override { ended(/*completed=*/false, when); }
+  void ended(bool completed, Tick at);
+  // AxisListener: the quadrature index watch sees every step, whoever moves the axis.
+  void step_taken(const Step& step) override;
+  void start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at);
   void check_sustain_reached(Tick now);
   void width_advance(Tick now);
   Tick delay_ticks() const;
 
-  Axis& axis_;
+  AxisCore& core_;
   const MotorPort& inputs_;
   // Settings.
   Profile profile_;

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "node/motion/axis.hpp"
 #include "node/motion/hp_channel.hpp"
 #include "node/sim/machine.hpp"
 
@@ -47,7 +48,7 @@ Row measure(double rate, double slope) {
   RecordingMotor motor(m);
   bool estop = false;
   Axis axis(AxisConfig{}, {&motor}, &estop);
-  hp::Channel ch(axis, motor);
+  hp::Channel ch(axis.core(), motor);
   Tick now = 0;
   ch.profile(hp::Profile{hp::ProfileMode::Freq, 0, 10'000, slope, 1e-6}, now);
   ch.sustain(rate, true, now);

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "node/motion/axis.hpp"
 #include "node/motion/hp_channel.hpp"
 #include "node/sim/machine.hpp"
 
@@ -30,7 +31,7 @@ class HpChannel : public ::testing::Test {
   void build(sim::AxisMachineConfig m = plain()) {
     motor = std::make_unique<sim::AxisMachine>(m);
     axis = std::make_unique<Axis>(AxisConfig{}, std::vector<MotorPort*>{motor.get()}, &estop);
-    ch = std::make_unique<Channel>(*axis, *motor);
+    ch = std::make_unique<Channel>(axis->core(), *motor);
     ch->on_interrupt = [this](uint8_t e, Tick t) { interrupts.push_back({e, t}); };
     now = 0;
   }
@@ -154,7 +155,7 @@ TEST_F(HpChannel, AppendixAPulseRateResolutionAndMaximumBoundTheRates) {
   int64_t held = position();
   wait(2000);
   EXPECT_LE(position() - held, 1);
-  EXPECT_TRUE(axis->busy());
+  EXPECT_TRUE(axis->core().busy());
   ch->halt_sgl(now);
   // With a minimum the clamp lifts a tiny rate to it, as the manual says (3-12).
   ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
@@ -217,7 +218,7 @@ TEST_F(HpChannel, AnArmedSustainIsCheckedAgainWhenItFires) {
   ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
   wait(1000);
   EXPECT_EQ(position(), 0);
-  EXPECT_FALSE(axis->busy());
+  EXPECT_FALSE(axis->core().busy());
 }
 
 TEST_F(HpChannel, ProfileWidthSettingConflictsAreTheTablesRows) {
@@ -243,7 +244,7 @@ TEST_F(HpChannel, MoveRampsContinuouslyFromMinToMaxAtTheSlope) {
   EXPECT_EQ(position(), 2000);
   EXPECT_EQ(done(), 0);
   EXPECT_NEAR(to_ms(motor->last_step_time()), ideal_ms, 12);  // within ~one step at min
-  EXPECT_LE(axis->generator().marks().peak_level, level_of(axis->generator().ramp(), peak) + 1);
+  EXPECT_LE(axis->core().generator().marks().peak_level, level_of(axis->core().generator().ramp(), peak) + 1);
   // First step: at 100 Hz rising, a little under 10 ms after the start.
   ASSERT_TRUE(ch->first_step_time());
   EXPECT_GT(to_ms(*ch->first_step_time()), 9.0);
@@ -363,7 +364,7 @@ TEST_F(HpChannel, SustainZeroStopsAtMinAndReversingNeedsAStopError91) {
   EXPECT_EQ(done(), -2);
   wait(2100);  // (500-100)/200 = 2 s down to min, then stop
   EXPECT_EQ(done(), 0);
-  EXPECT_FALSE(axis->busy());
+  EXPECT_FALSE(axis->core().busy());
   EXPECT_EQ(ch->last_error(), Error::None);
   int64_t p = position();
   ASSERT_EQ(ch->sustain(-500, true, now), Error::None);
@@ -419,7 +420,7 @@ TEST_F(HpChannel, TrigSysStartsOnSync) {
 TEST_F(HpChannel, TrigChan0StartsWithChannel0) {
   sim::AxisMachine motor1(plain());
   Axis axis1(AxisConfig{}, {&motor1}, &estop);
-  Channel ch1(axis1, motor1);
+  Channel ch1(axis1.core(), motor1);
   ch->on_triggered = [&](Tick t) { ch1.chan0_triggered(t); };
   ASSERT_EQ(ch1.trig(TrigMode::Chan0, now), Error::None);
   ASSERT_EQ(ch1.move(30, false, true, now), Error::None);
@@ -653,7 +654,7 @@ TEST_F(HpChannel, AHornerStopEndsAnHpMoveAsAHalt) {
   axis->write_commands(command::kClearErrors, now);  // the Horner power-up error first
   axis->write_commands(command::kImmediateStop, now);
   EXPECT_EQ(done(), 1);
-  EXPECT_FALSE(axis->busy());
+  EXPECT_FALSE(axis->core().busy());
 }
 
 // ---------------------------------------------------------------- WIDTH mode SUSTAIN (3-26)
@@ -739,7 +740,7 @@ TEST(HpPulseOutputs, TheMotorGetsTheOutputsAndFollowsTheirDirectionInBothModes) 
       PulseRecorder motor(m);
       bool estop = false;
       Axis axis(AxisConfig{}, {&motor}, &estop);
-      Channel ch(axis, motor);
+      Channel ch(axis.core(), motor);
       ch.pulse(PulseSetup{mode, true, ndir_high});
       ASSERT_EQ(ch.move(7, false, true, 0), Error::None);
       ch.advance(kClockHz);

@@ -31,7 +31,7 @@ bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
 HpService::HpService(od::Dictionary& dictionary, AxisBank& axes, EmcyProducer& emcy)
     : dictionary_(dictionary), axes_(axes), emcy_(emcy) {
   for (unsigned a = 0; a < axes_.count(); ++a) {
-    channels_.push_back(std::make_unique<hp::Channel>(axes_.axis(a), axes_.machine().axes.at(a)));
+    channels_.push_back(std::make_unique<hp::Channel>(axes_.core(a), axes_.machine().axes.at(a)));
     hp::Channel& ch = *channels_.back();
     ch.on_interrupt = [this, a](uint8_t event, motion::Tick) {
       // Halts and limits also go out as EMCY (condition 3, 4, 5 -> 0xFF43..0xFF45).

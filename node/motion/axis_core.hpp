@@ -1,0 +1,175 @@
+// The motion core of one axis: the pulse engine, the motor position, the motor(s) it steps
+// and the e-stop guard, and the one rule of which job runs. The Horner registers
+// (node/motion/axis.*), the HP 44714A channel (node/motion/hp_channel.*) and the CiA 402
+// drive are front ends: a front end asks the core for a job and applies its own rules to
+// the job's steps; every front end may listen to every job's events.
+//
+// Arbitration (the README's "HP 44714A channels" and "CiA 402" sections say it to users):
+//   - one job at a time: a front end can start a job only while the axis is idle (no job,
+//     no motion); `busy()` tells a front end to refuse with its own error (HP error 89);
+//   - any front end may stop the axis whatever runs: `stop` decelerates (Horner %Q15, a
+//     lost master), `abort` ends at once (Horner %Q16, a latched Horner error); the owner
+//     of an aborted job is told (`FrontEnd::aborted`);
+//   - the e-stop input ends every job before its next step; the owner is told, then every
+//     listener (`AxisListener::emergency_stop`).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "node/motion/motor_port.hpp"
+#include "node/motion/step_generator.hpp"
+
+namespace stepnode::motion {
+
+class AxisCore;
+
+// The rules of one command set for the jobs it starts. The core calls the owner of the
+// running job only.
+class FrontEnd {
+ public:
+  virtual ~FrontEnd() = default;
+  // Which of the optional hooks below the motion about to start uses; asked once per
+  // motion (`AxisCore::start`), so a job pays per step only for what it uses.
+  struct Hooks {
+    bool pulse = false;        // pulse(): the job's steps are output signals
+    bool deadline = false;     // deadline()/at_deadline(): a time between steps matters
+    bool before_step = false;  // before_step()
+  };
+  virtual Hooks hooks() const { return {}; }
+  // How the job's step leaves the outputs (HP PULSE SD|SS).
+  virtual OutputPulse pulse(const Step& step) { return OutputPulse{.step_direction = true,
+                                                                   .ndir_level = step.direction > 0,
+                                                                   .ndir_positive_level = true}; }
+  // A job that has not begun to step yet (STP100 5.3.4: a move toward an active limit
+  // waits for its release; `AxisCore::claim`): the axis is busy, the e-stop ends it. While
+  // it waits, `poll` runs before anything else in each round of `advance_to` and may start
+  // the motion (or give the job up: `AxisCore::release`).
+  virtual void poll(Tick now) { (void)now; }
+  // A time between steps at which the job changes course (FIND HOME step 5's dwell), and
+  // what happens then.
+  virtual std::optional<Tick> deadline() const { return std::nullopt; }
+  virtual void at_deadline(Tick when) { (void)when; }
+  // Just before a step of the job is taken, and after the motor took it.
+  virtual void before_step() {}
+  virtual void after_step(const Step& step) = 0;
+  // The motion ended by itself (the distance is done, a stop ramp ran out, a halt from
+  // after_step). The job is over; the front end may start the next one from here.
+  virtual void motion_ended(Tick when) = 0;
+  // Another front end, or the e-stop, ended the job at once: no motion_ended follows.
+  virtual void aborted(Tick when) { (void)when; }
+};
+
+// Everyone interested in every job, whoever runs it.
+class AxisListener {
+ public:
+  virtual ~AxisListener() = default;
+  // Every step of any job but the listener's own (see `listen`), after the motor took it and
+  // before the owner's after_step, while the listener watches steps (`watch_steps`).
+  virtual void step_taken(const Step& step) { (void)step; }
+  // A job began (its first motion or, for a waiting job, its claim).
+  virtual void job_started(const FrontEnd& owner, Tick when) { (void)owner; (void)when; }
+  // A front end halted its own job (no ramp, no motion_ended).
+  virtual void job_halted(const FrontEnd& owner, Tick when) { (void)owner; (void)when; }
+  // The e-stop ended the motion (`was_moving`: steps were going out).
+  virtual void emergency_stop(Tick when, bool was_moving) { (void)when; (void)was_moving; }
+  // The end of every advance_to (statuses that follow the motion are published here).
+  virtual void advanced(Tick now) { (void)now; }
+};
+
+class AxisCore {
+ public:
+  // `motors`: one, or three for an SPM30 multiplexed axis (one stepped at a time);
+  // `estop` is the e-stop input (may be null).
+  AxisCore(std::vector<MotorPort*> motors, const bool* estop);
+
+  // Power-up: no job, no motion, position 0, the first motor selected. Owners are not told
+  // (every front end has its own power-up).
+  void power_up(Tick now);
+
+  // Takes every step due up to `now`, with the owner's rules, then tells the listeners.
+  void advance_to(Tick now);
+
+  // --- Jobs ----------------------------------------------------------------------------
+  bool busy() const { return owner_ != nullptr || generator_.moving(); }
+  const FrontEnd* owner() const { return owner_; }
+  bool owned_by(const FrontEnd& f) const { return owner_ == &f; }
+  // The owner's next motion: the first of a job (refused with false while another front
+  // end's job runs) or the next of the same job (homing's back-off, a repeated move).
+  bool start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
+  // A job that waits before its first motion (FrontEnd::poll); `start` ends the wait.
+  bool claim(FrontEnd& by, Tick now);
+  bool waiting() const { return waiting_; }
+  // The owner ends its wait without a motion: the job ends (motion_ended) at the next
+  // advance.
+  void end_wait(const FrontEnd& by) {
+    if (owner_ == &by) waiting_ = false;
+  }
+  // The owner gives its job up without a motion_ended (the job ended in its rules).
+  void release(const FrontEnd& by);
+  // Decelerate whatever runs to the base velocity and stop (any front end may).
+  void stop(Tick at) { generator_.stop(at); }
+  // End whatever runs at once; the owner, unless it is `by`, is told (FrontEnd::aborted).
+  void abort(const FrontEnd* by, Tick at);
+  // The owner stops its own job at once (no ramp, no motion_ended); listeners are told.
+  void halt(const FrontEnd& by, Tick at);
+  // Stop the generator at once but keep the job (homing's stop on the origin, in
+  // after_step: the job goes on or motion_ended follows).
+  void halt_motion(Tick at) { generator_.halt(at); }
+  // The running motion's velocity and grid (HP SUSTAIN) and end point (indexed move).
+  void change_velocity(Tick at, int64_t level, std::optional<RampSpec> then = std::nullopt) {
+    generator_.change_velocity(at, level, std::move(then));
+  }
+  void regrid(Tick at, const RampSpec& ramp) { generator_.regrid(at, ramp); }
+  void retarget(Tick at, int64_t steps, const RampSpec& ramp) { generator_.retarget(at, steps, ramp); }
+
+  // --- State ---------------------------------------------------------------------------
+  const StepGenerator& generator() const { return generator_; }
+  bool moving() const { return generator_.moving(); }
+  std::optional<Tick> next_step_time() { return generator_.peek(); }
+  int32_t position() const { return position_; }
+  void set_position(int32_t p) { position_ = p; }
+  // The DIR output's level: set at the start of every motion (STP100 5.3.5).
+  bool dir_output_high() const { return dir_high_; }
+  void set_dir_output(bool high) { dir_high_ = high; }
+  bool estop_active() const { return estop_ && *estop_; }
+
+  // The motor stepped and sensed (SPM30 3.2 SELECT AXIS picks one of three).
+  MotorPort& motor() { return *motors_[selected_]; }
+  const MotorPort& motor() const { return *motors_[selected_]; }
+  const MotorPort& motor(unsigned n) const { return *motors_.at(n); }
+  unsigned motors() const { return static_cast<unsigned>(motors_.size()); }
+  unsigned selected() const { return selected_; }
+  void select(unsigned n) { selected_ = n; }
+
+  // `self`: the front end the listener is (its own jobs' steps go to its after_step only).
+  void listen(AxisListener& listener, const FrontEnd* self = nullptr) { listeners_.push_back({&listener, self}); }
+  // Whether `listener` is given every step (step_taken); off, a step costs it nothing.
+  void watch_steps(const AxisListener& listener, bool on);
+
+ private:
+  void take(const Step& step);
+  void emergency_stop(Tick now);
+  bool ramp_ends_later(Tick now);
+
+  std::vector<MotorPort*> motors_;
+  const bool* estop_;
+  StepGenerator generator_;
+  void set_owner(FrontEnd* owner);
+
+  FrontEnd* owner_ = nullptr;
+  FrontEnd::Hooks hooks_;
+  bool waiting_ = false;
+  struct Listener {
+    AxisListener* listener;
+    const FrontEnd* self;
+    bool steps = false;
+  };
+  std::vector<Listener> listeners_;
+  unsigned step_watchers_ = 0;
+  int32_t position_ = 0;
+  bool dir_high_ = false;
+  unsigned selected_ = 0;
+};
+
+}  // namespace stepnode::motion
