@@ -109,6 +109,8 @@ class AxisCore {
   void release(const FrontEnd& by);
   // Decelerate whatever runs to the base velocity and stop (any front end may).
   void stop(Tick at) { generator_.stop(at); }
+  // The same at another deceleration (ticks per level of the running grid).
+  void stop(Tick at, Rational decel) { generator_.stop(at, decel); }
   // End whatever runs at once; the owner, unless it is `by`, is told (FrontEnd::aborted).
   void abort(const FrontEnd* by, Tick at);
   // The owner stops its own job at once (no ramp, no motion_ended); listeners are told.

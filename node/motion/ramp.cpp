@@ -1,5 +1,7 @@
 #include "node/motion/ramp.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -55,6 +57,29 @@ RampSpec frequency_ramp(int64_t min_hz, int64_t max_hz, int64_t slope_mhz_per_s)
   // ticks per level = kClockHz / (slope_hz * kLevelsPerHz) = kClockHz * 1000 / (slope_mhz * 64)
   r.accel_ticks_per_level = Rational{kClockHz * 1000, slope_mhz_per_s * kLevelsPerHz};
   r.decel_ticks_per_level = r.accel_ticks_per_level;
+  return r;
+}
+
+int64_t profile_levels_per_hz(int64_t steepest) {
+  const int64_t fine = kClockHz / (64 * std::max<int64_t>(steepest, 1));
+  return std::clamp<int64_t>(fine, 1, 64);
+}
+
+RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t levels_per_hz) {
+  if (velocity < 1 || accel < 1 || decel < 1 || levels_per_hz < 1)
+    throw std::invalid_argument("a profile ramp needs a velocity, acceleration and deceleration > 0");
+  RampSpec r;
+  r.phase_per_step = kClockHz * levels_per_hz;
+  r.base_level = 0;  // from and to standstill
+  r.run_level = velocity * levels_per_hz;
+  r.accel_ticks_per_level = slope_ticks_per_level(accel, levels_per_hz);
+  r.decel_ticks_per_level = slope_ticks_per_level(decel, levels_per_hz);
+  // The last step a ramp down leaves over goes at the velocity one step from standstill
+  // reaches (sqrt(2 * decel)), never faster than the run velocity.
+  const auto one_step = static_cast<int64_t>(std::llround(std::sqrt(2.0 * static_cast<double>(decel)) *
+                                                          static_cast<double>(levels_per_hz)));
+  r.min_creep_level = std::clamp<int64_t>(one_step, 1, r.run_level);
+  r.horner_triangle_rule = false;
   return r;
 }
 

@@ -53,6 +53,19 @@ RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t
 constexpr int64_t kLevelsPerHz = 64;
 RampSpec frequency_ramp(int64_t min_hz, int64_t max_hz, int64_t slope_mhz_per_s);
 
+// A ramp from standstill to `velocity` steps/s, accelerating at `accel` and decelerating at
+// `decel` steps/s^2 (CiA 402 6081h/6083h/6084h), on the grid `levels_per_hz` levels per
+// step/s (profile_levels_per_hz): every whole velocity is a level, so a velocity mode holds
+// any target exactly, and the slopes are exact rationals. All arguments > 0.
+RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t levels_per_hz);
+// The finest grid whose level changes stay at least 64 ticks (13 us) apart at `steepest`
+// steps/s^2 (their cost near that of the steps), 1..64 levels per step/s.
+int64_t profile_levels_per_hz(int64_t steepest);
+// Ticks per level of a slope of `accel` steps/s^2 on a grid of `levels_per_hz`.
+inline Rational slope_ticks_per_level(int64_t accel, int64_t levels_per_hz) {
+  return Rational{kClockHz, accel * levels_per_hz};
+}
+
 // Largest useful acceleration/deceleration time (SPM30 3.4.5): (AQ5-AQ4)/0.3 ms, capped at
 // 27300; beyond it Z would exceed 16384.
 int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5);

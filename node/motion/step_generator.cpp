@@ -211,6 +211,19 @@ void StepGenerator::stop(Tick at) {
   }
 }
 
+void StepGenerator::stop(Tick at, Rational decel) {
+  if (phase_ == MotionPhase::Idle) return;
+  advance_to(at);
+  ramp_.decel_ticks_per_level = decel;
+  if (phase_ == MotionPhase::Decelerating) {
+    // Already ramping down (to a target or a lower velocity): the rest at the new rate.
+    distance_.reset();
+    holding_ = false;
+    decel_floor_ = ramp_.base_level;
+  }
+  stop(at);
+}
+
 void StepGenerator::halt(Tick at) {
   if (phase_ == MotionPhase::Idle) return;
   t_ = std::max(t_, at);

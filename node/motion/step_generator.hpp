@@ -28,8 +28,10 @@ class StepGenerator {
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek();
 
-  // Decelerate to the base velocity from time `at` and end there (SPM30 %Q15).
+  // Decelerate to the base velocity from time `at` and end there (SPM30 %Q15); with
+  // `decel`, at that deceleration (ticks per level) instead of the ramp's (CiA 402 quick stop).
   void stop(Tick at);
+  void stop(Tick at, Rational decel);
   // End at once, no ramp (immediate stop, limits, e-stop).
   void halt(Tick at);
   // From time `at`, ramp to a new velocity level and hold it (continuous motion without a
@@ -52,6 +54,7 @@ class StepGenerator {
 
   MotionPhase phase() const { return phase_; }
   bool moving() const { return phase_ != MotionPhase::Idle; }
+  bool stopping() const { return moving() && stopping_; }  // stop(): ramping down to end
   int64_t level() const { return level_; }
   double velocity() const { return phase_ == MotionPhase::Idle ? 0.0 : ramp_.velocity_of(level_); }
   int64_t steps_done() const { return steps_done_; }

@@ -1,0 +1,147 @@
+// One CiA 402 axis as a front end of the motion core (node/motion/axis_core.hpp): the power
+// drive system state machine (drive_state.hpp) gates the motion; the profile position (PP)
+// and profile velocity (PV) modes run on the engine's exact step times (CiA 402-2 / IEC
+// 61800-7-201 "Profile position mode", "Profile velocity mode"). Everything is in the
+// drive's internal units: steps, steps/s, steps/s^2 (the profile's service converts the
+// user units of 608Fh/6091h/6092h). Pure and deterministic: time comes in as ticks.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <optional>
+
+#include "node/motion/axis_core.hpp"
+#include "node/profiles/cia402/drive_state.hpp"
+
+namespace stepnode::cia402 {
+
+// Modes of operation (6060h / 6061h).
+enum class Mode : int8_t {
+  None = 0,
+  ProfilePosition = 1,
+  ProfileVelocity = 3,
+  Homing = 6,
+  InterpolatedPosition = 7,
+  CyclicSyncPosition = 8,
+  CyclicSyncVelocity = 9,
+};
+
+// The modes this drive runs today; 6060h refuses the others.
+constexpr bool runs(Mode m) { return m == Mode::ProfilePosition || m == Mode::ProfileVelocity; }
+
+// Controlword bits 4..9, mode-specific (CiA 402-2 "Profile position mode": 6040h bits).
+namespace cw_pp {
+constexpr uint16_t kNewSetPoint = 1u << 4;
+constexpr uint16_t kChangeSetImmediately = 1u << 5;
+constexpr uint16_t kRelative = 1u << 6;
+constexpr uint16_t kChangeOnSetPoint = 1u << 9;
+}  // namespace cw_pp
+// Statusword bits 12, 13 of the modes (6041h).
+namespace sw_mode {
+constexpr uint16_t kSetPointAcknowledge = 1u << 12;  // PP
+constexpr uint16_t kFollowingError = 1u << 13;       // PP
+constexpr uint16_t kSpeedZero = 1u << 12;            // PV
+}  // namespace sw_mode
+
+// The profile (6067h..6085h, 607Dh) in steps, steps/s and steps/s^2.
+struct Parameters {
+  uint32_t max_velocity = 100'000;          // 607Fh
+  uint32_t profile_velocity = 1'000;        // 6081h
+  uint32_t acceleration = 10'000;           // 6083h
+  uint32_t deceleration = 10'000;           // 6084h
+  uint32_t quick_stop_deceleration = 50'000;  // 6085h
+  uint32_t position_window = 0;             // 6067h: |target - actual| <= window
+  uint16_t position_window_time_ms = 0;     // 6068h
+  int32_t min_position_limit = INT32_MIN;   // 607Dh:1
+  int32_t max_position_limit = INT32_MAX;   // 607Dh:2
+};
+
+class Drive final : public motion::FrontEnd, public motion::AxisListener {
+ public:
+  explicit Drive(motion::AxisCore& core);
+  Drive(const Drive&) = delete;
+  Drive& operator=(const Drive&) = delete;
+
+  // Power-up / NMT reset node: transitions 0 and 1, no set-point, mode as configured.
+  void power_up(motion::Tick now);
+
+  // ---- what the master writes
+  void controlword(uint16_t cw, motion::Tick now);  // 6040h
+  void set_mode(Mode mode, motion::Tick now);        // 6060h (runs(mode) only)
+  void set_target_position(int32_t steps) { target_position_ = steps; }  // 607Ah
+  void set_target_velocity(int32_t steps_per_s, motion::Tick now);      // 60FFh
+  Parameters& parameters() { return parameters_; }
+  void set_options(const Options& options) { machine_.set_options(options); }
+
+  // ---- the drive's events
+  // A fault (603Fh code): transition 13 and the 605Eh reaction.
+  void fault(uint16_t error_code, motion::Tick now);
+  // The master was lost: the 6007h reaction.
+  void connection_lost(int16_t option_6007, motion::Tick now);
+  // Time passes: the position window time (6068h) runs out between steps.
+  void advance(motion::Tick now);
+
+  // ---- what the master reads
+  uint16_t statusword() const;                        // 6041h
+  Mode mode_display() const { return mode_display_; }  // 6061h
+  State state() const { return machine_.state(); }
+  uint16_t error_code() const { return machine_.error_code(); }  // 603Fh
+  int32_t position_demand() const;                    // 6062h: where the trajectory is
+  int32_t position_actual() const { return core_.position(); }  // 6063h/6064h (open loop)
+  int32_t velocity_actual() const;                    // 606Ch, steps/s signed
+  uint32_t digital_inputs() const;                    // 60FDh
+  const DriveStateMachine& machine() const { return machine_; }
+
+  // The statusword changed (an event-driven TPDO goes out).
+  std::function<void()> on_status_changed;
+
+  // FrontEnd: this drive's jobs.
+  void after_step(const motion::Step& step) override;
+  void motion_ended(motion::Tick when) override;
+  void aborted(motion::Tick when) override;
+  // AxisListener: the status follows every job on the axis; the e-stop is a fault (9000h).
+  void emergency_stop(motion::Tick when, bool was_moving) override;
+  void advanced(motion::Tick now) override;
+
+ private:
+  struct SetPoint {
+    int64_t target = 0;  // absolute, steps, inside the software limits
+  };
+  void carry_out(Stop stop, motion::Tick now);
+  void stopped(motion::Tick now);
+  void new_set_point(uint16_t cw, motion::Tick now);
+  void start_positioning(const SetPoint& sp, motion::Tick now);
+  void velocity_to(int64_t target, motion::Tick now);
+  void halt(bool on, motion::Tick now);
+  motion::RampSpec ramp(uint32_t velocity) const;
+  motion::Rational quick_stop_slope() const;
+  int64_t clamp_to_limits(int64_t target);
+  void notify();
+
+  motion::AxisCore& core_;
+  DriveStateMachine machine_;
+  Parameters parameters_;
+  Mode mode_ = Mode::ProfilePosition;
+  Mode mode_display_ = Mode::ProfilePosition;
+  uint16_t controlword_ = 0;
+  int32_t target_position_ = 0;
+  int32_t target_velocity_ = 0;
+  int64_t grid_ = 1;  // levels per step/s of the running motion
+
+  // PP: the set-point being carried out, the buffered next one (bit 5 = 0), and the
+  // handshake (bit 4 edge -> bit 12 until bit 4 is taken back).
+  std::optional<SetPoint> active_, next_;
+  std::optional<int64_t> last_target_;  // the preceding target (relative set-points)
+  bool restart_after_stop_ = false;     // change set immediately: stop, then go to active_
+  bool acknowledged_ = false;
+  bool internal_limit_ = false;
+  std::optional<motion::Tick> in_window_since_;
+  bool target_reached_ = true;
+  // A stop ramp the state machine waits for (quick stop, 605Ch/605Bh, fault reaction).
+  bool stopping_for_machine_ = false;
+  bool halted_ = false;
+  // PV: a reversal runs as a stop, then a start the other way.
+  std::optional<int64_t> velocity_after_stop_;
+  uint16_t last_status_ = 0;
+};
+
+}  // namespace stepnode::cia402

@@ -1,0 +1,318 @@
+// The CiA 402 drive on the motion core, in virtual time: the controlword sequences a master
+// sends (CiA 402-2 "device control": 06h shutdown, 07h switch on, 0Fh enable operation,
+// 0Bh quick stop, 00h disable voltage) and the profile position / profile velocity modes'
+// bits (6040h bits 4, 5, 6, 8; 6041h bits 10, 11, 12), with the step times the engine makes.
+#include "node/profiles/cia402/drive.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "node/sim/machine.hpp"
+
+namespace stepnode::cia402 {
+namespace {
+
+using motion::kClockHz;
+using motion::Tick;
+
+constexpr Tick ms(int64_t n) { return n * kClockHz / 1000; }
+
+// The statusword's state bits (6041h state coding, mask 0x6F).
+constexpr uint16_t kStateMask = 0x006F;
+constexpr uint16_t kSwitchOnDisabled = 0x0040, kReadyToSwitchOn = 0x0021, kSwitchedOn = 0x0023,
+                   kOperationEnabled = 0x0027, kQuickStopActive = 0x0007, kFault = 0x0008;
+constexpr uint16_t kTargetReached = 1u << 10, kInternalLimit = 1u << 11, kBit12 = 1u << 12;
+
+struct Recording : sim::AxisMachine {
+  using sim::AxisMachine::AxisMachine;
+  std::vector<Tick> times;
+  void step(Tick time, int direction) override {
+    times.push_back(time);
+    sim::AxisMachine::step(time, direction);
+  }
+};
+
+class DriveTest : public ::testing::Test {
+ protected:
+  Recording motor;
+  bool estop = false;
+  motion::AxisCore core{{&motor}, &estop};
+  Drive drive{core};
+  Tick now = 0;
+
+  uint16_t state() const { return drive.statusword() & kStateMask; }
+  void cw(uint16_t value) { drive.controlword(value, now); }
+  void run(Tick dt) {
+    const Tick end = now + dt;
+    while (now < end) drive.advance(now = std::min(end, now + ms(1)));
+  }
+  void enable() {
+    cw(0x06);
+    cw(0x07);
+    cw(0x0F);
+    ASSERT_EQ(state(), kOperationEnabled);
+  }
+  void set_profile(uint32_t v, uint32_t acc, uint32_t dec) {
+    drive.parameters().profile_velocity = v;
+    drive.parameters().acceleration = acc;
+    drive.parameters().deceleration = dec;
+  }
+};
+
+TEST_F(DriveTest, TheMastersStartSequenceReachesOperationEnabled) {
+  EXPECT_EQ(state(), kSwitchOnDisabled);  // transitions 0 and 1 at power-up
+  cw(0x06);
+  EXPECT_EQ(state(), kReadyToSwitchOn);
+  cw(0x07);
+  EXPECT_EQ(state(), kSwitchedOn);
+  cw(0x0F);
+  EXPECT_EQ(state(), kOperationEnabled);
+  EXPECT_TRUE(drive.statusword() & (1u << 9));  // remote
+}
+
+TEST_F(DriveTest, NoMotionUnlessOperationIsEnabled) {
+  drive.set_target_position(500);
+  cw(0x06);
+  cw(0x07);
+  cw(0x1F & ~0x08);  // switched on with bit 4: not enabled, nothing moves
+  run(ms(500));
+  EXPECT_EQ(motor.position(), 0);
+}
+
+// A trapezoid of 1000 steps at 1000 steps/s with 10,000 steps/s^2 both ways: 50 steps and
+// 0.1 s up, 900 steps at 1000 steps/s, 50 steps and 0.1 s down: 1.1 s.
+TEST_F(DriveTest, ProfilePositionRunsTheTrapezoidWithTheSetPointHandshake) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  EXPECT_TRUE(drive.statusword() & kTargetReached);
+  drive.set_target_position(1000);
+  cw(0x1F);  // new set-point, absolute
+  EXPECT_TRUE(drive.statusword() & kBit12);  // set-point acknowledge
+  EXPECT_FALSE(drive.statusword() & kTargetReached);
+  cw(0x0F);
+  EXPECT_FALSE(drive.statusword() & kBit12);  // ready for the next one
+  run(ms(1200));
+  EXPECT_EQ(motor.position(), 1000);
+  EXPECT_EQ(drive.position_actual(), 1000);
+  EXPECT_TRUE(drive.statusword() & kTargetReached);
+  ASSERT_EQ(motor.times.size(), 1000u);
+  const double last = static_cast<double>(motor.times.back()) / kClockHz;
+  EXPECT_NEAR(last, 1.1, 0.005);
+  // Cruise: 1 ms between steps, exactly (1000 steps/s on the 4.9152 MHz timebase).
+  EXPECT_EQ(motor.times[500] - motor.times[499], kClockHz / 1000);
+  // The first step of a ramp from standstill: at sqrt(2/a) = 14.1 ms.
+  EXPECT_NEAR(static_cast<double>(motor.times[0]) / kClockHz, std::sqrt(2.0 / 10'000), 0.001);
+}
+
+TEST_F(DriveTest, RelativeSetPointsAddToThePrecedingTarget) {
+  enable();
+  set_profile(2000, 20'000, 20'000);
+  drive.set_target_position(300);
+  cw(0x5F);  // new set-point, relative
+  cw(0x4F);
+  run(ms(600));
+  EXPECT_EQ(motor.position(), 300);
+  cw(0x5F);
+  cw(0x4F);
+  run(ms(600));
+  EXPECT_EQ(motor.position(), 600);
+}
+
+TEST_F(DriveTest, ABufferedSetPointRunsAfterTheFirstAndFillsTheBuffer) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(500);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(100));
+  drive.set_target_position(-200);
+  cw(0x1F);  // bit 5 = 0: after the first
+  cw(0x0F);
+  EXPECT_TRUE(drive.statusword() & kBit12);  // the buffer is full: no third one now
+  run(ms(505));  // the first ends at 0.6 s; the second's first step comes 14 ms later
+  EXPECT_EQ(motor.position(), 500);  // the first target is reached...
+  run(ms(1500));
+  EXPECT_EQ(motor.position(), -200);  // ...then the second
+  EXPECT_FALSE(drive.statusword() & kBit12);
+  EXPECT_TRUE(drive.statusword() & kTargetReached);
+}
+
+TEST_F(DriveTest, ChangeSetImmediatelyMovesTheEndPointWithoutStopping) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(400);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(200));
+  drive.set_target_position(1500);
+  cw(0x3F);  // new set-point, change immediately
+  cw(0x0F);
+  run(ms(2500));
+  EXPECT_EQ(motor.position(), 1500);
+  // No stop at 400: the step interval there is the cruise interval.
+  EXPECT_EQ(motor.times[400] - motor.times[399], kClockHz / 1000);
+}
+
+TEST_F(DriveTest, ChangeSetImmediatelyBackwardsStopsThenGoesThere) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(2000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(500));
+  const int64_t at = motor.position();
+  drive.set_target_position(100);
+  cw(0x3F);
+  cw(0x0F);
+  run(ms(3000));
+  EXPECT_EQ(motor.position(), 100);
+  EXPECT_GT(at, 100);
+}
+
+TEST_F(DriveTest, HaltStopsWithTheProfileDecelerationAndShowsTargetReached) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(5000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(500));
+  const int64_t at = motor.position();
+  cw(0x010F);  // halt
+  run(ms(300));
+  EXPECT_EQ(state(), kOperationEnabled);  // a halt is no state change
+  EXPECT_NEAR(static_cast<double>(motor.position() - at), 50, 2);  // v^2 / 2d
+  EXPECT_TRUE(drive.statusword() & kTargetReached);
+  cw(0x0F);
+  run(ms(300));
+  EXPECT_LT(motor.position(), 5000);  // the set-point was given up
+}
+
+TEST_F(DriveTest, QuickStopRampsAt6085AndEndsInSwitchOnDisabled) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.parameters().quick_stop_deceleration = 100'000;
+  drive.set_target_position(5000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(500));
+  const int64_t at = motor.position();
+  cw(0x0B);  // quick stop, 605Ah = 2: quick stop ramp, then Switch on disabled
+  EXPECT_EQ(state(), kQuickStopActive);
+  run(ms(100));
+  EXPECT_EQ(state(), kSwitchOnDisabled);
+  EXPECT_NEAR(static_cast<double>(motor.position() - at), 5, 2);  // 1000^2 / (2 * 100,000)
+}
+
+TEST_F(DriveTest, QuickStopOptionSixStaysActiveAndTransition16EnablesAgain) {
+  Options o;
+  o.quick_stop = 6;
+  drive.set_options(o);
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(5000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(300));
+  cw(0x0B);
+  run(ms(300));
+  EXPECT_EQ(state(), kQuickStopActive);
+  cw(0x0F);  // enable operation: transition 16
+  EXPECT_EQ(state(), kOperationEnabled);
+  drive.set_target_position(0);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(3000));
+  EXPECT_EQ(motor.position(), 0);
+}
+
+TEST_F(DriveTest, DisableVoltageStopsThePulsesAtOnce) {
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(5000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(500));
+  const int64_t at = motor.position();
+  cw(0x00);
+  run(ms(200));
+  EXPECT_EQ(motor.position(), at);
+  EXPECT_EQ(state(), kSwitchOnDisabled);
+}
+
+TEST_F(DriveTest, ATargetBeyondTheSoftwareLimitStopsAtTheLimitWithBit11) {
+  enable();
+  set_profile(2000, 20'000, 20'000);
+  drive.parameters().max_position_limit = 300;
+  drive.parameters().min_position_limit = -300;
+  drive.set_target_position(1000);
+  cw(0x1F);
+  cw(0x0F);
+  EXPECT_TRUE(drive.statusword() & kInternalLimit);
+  run(ms(1000));
+  EXPECT_EQ(motor.position(), 300);
+}
+
+TEST_F(DriveTest, ALimitSwitchIsAFaultAndNoStepGoesPastIt) {
+  sim::AxisMachineConfig c;
+  c.upper_limit = 120;
+  motor.config() = c;
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_position(1000);
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(1500));
+  EXPECT_EQ(motor.position(), 120);
+  EXPECT_EQ(state() & 0x4F, kFault);
+  EXPECT_EQ(drive.error_code(), 0x8612);
+  cw(0x80);  // fault reset
+  EXPECT_EQ(state(), kSwitchOnDisabled);
+  enable();
+  drive.set_target_position(0);  // away from the limit
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(1500));
+  EXPECT_EQ(motor.position(), 0);
+}
+
+TEST_F(DriveTest, ProfileVelocityFollowsTheTargetAndReverses) {
+  drive.set_mode(Mode::ProfileVelocity, now);
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  EXPECT_TRUE(drive.statusword() & kBit12);  // speed = 0
+  drive.set_target_velocity(2000, now);
+  EXPECT_FALSE(drive.statusword() & kTargetReached);
+  run(ms(300));  // 0.2 s to 2000 steps/s
+  EXPECT_EQ(drive.velocity_actual(), 2000);
+  EXPECT_TRUE(drive.statusword() & kTargetReached);  // velocity reached
+  EXPECT_FALSE(drive.statusword() & kBit12);
+  drive.set_target_velocity(-1000, now);
+  run(ms(400));  // 0.2 s down, 0.1 s up the other way
+  EXPECT_EQ(drive.velocity_actual(), -1000);
+  drive.set_target_velocity(0, now);
+  run(ms(200));
+  EXPECT_EQ(drive.velocity_actual(), 0);
+  EXPECT_TRUE(drive.statusword() & kBit12);
+  const int64_t at = motor.position();
+  run(ms(200));
+  EXPECT_EQ(motor.position(), at);
+}
+
+TEST_F(DriveTest, AnotherFrontEndsJobKeepsTheSetPointUnacknowledged) {
+  struct Other final : motion::FrontEnd {
+    void after_step(const motion::Step&) override {}
+    void motion_ended(Tick) override {}
+  } other;
+  enable();
+  ASSERT_TRUE(core.start(other, motion::profile_ramp(500, 5000, 5000, 1), +1, 100, now));
+  drive.set_target_position(1000);
+  cw(0x1F);
+  EXPECT_FALSE(drive.statusword() & kBit12);
+  run(ms(1000));
+  EXPECT_EQ(motor.position(), 100);
+}
+
+}  // namespace
+}  // namespace stepnode::cia402
