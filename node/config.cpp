@@ -67,17 +67,19 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
     if (*on) cfg.options.layout.axes = 1;
   }
   if (auto v = t["profiles"]) {
-    // The profiles the device has: any of "horner", "hp", "user" (default: all three).
+    // The profiles the device has: any of "horner", "hp", "user", "cia402" (default: the
+    // first three).
     auto* list = v.as_array();
-    if (!list) bad("profiles", "must be a list of \"horner\", \"hp\", \"user\"");
+    if (!list) bad("profiles", "must be a list of \"horner\", \"hp\", \"user\", \"cia402\"");
     DeviceLayout& l = cfg.options.layout;
-    l.horner = l.hp = l.user = false;
+    l.horner = l.hp = l.user = l.cia402 = false;
     for (const auto& item : *list) {
       auto name = item.value<std::string>();
       if (name && *name == "horner") l.horner = true;
       else if (name && *name == "hp") l.hp = true;
       else if (name && *name == "user") l.user = true;
-      else bad("profiles", "must be a list of \"horner\", \"hp\", \"user\"");
+      else if (name && *name == "cia402") l.cia402 = true;
+      else bad("profiles", "must be a list of \"horner\", \"hp\", \"user\", \"cia402\"");
     }
   }
   if (auto v = t["serial_number"]) {

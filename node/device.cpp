@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "node/diagnostic_objects.hpp"
+#include "node/profiles/cia402/service.hpp"
 #include "node/profiles/horner/service.hpp"
 #include "node/profiles/hp44714a/service.hpp"
 #include "node/profiles/sim/service.hpp"
@@ -18,6 +19,8 @@ Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults
   profiles_.push_back(std::make_unique<SimService>(od, axes_));
   if (options.layout.horner) profiles_.push_back(std::make_unique<HornerService>(od, axes_, canopen_.emcy()));
   if (options.layout.hp) profiles_.push_back(std::make_unique<HpService>(od, axes_, canopen_.emcy()));
+  if (options.layout.cia402) profiles_.push_back(std::make_unique<Cia402Service>(od, axes_, canopen_.emcy()));
+  register_axes_ = options.layout.horner || options.layout.hp;
   for (const RefusedMapping& r : refused_) {
     spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
                  r.index, od::abort_text(r.reason));
@@ -70,7 +73,11 @@ void Device::sync(uint64_t now_us) {
 }
 
 void Device::master_lost(uint64_t now_us) {
-  axes_.master_lost(now_us);
+  // The register front ends' rule (README "Communication errors and NMT states"): every
+  // moving axis ramps down and %I8 latches. A CiA 402 only device follows 6007h alone.
+  if (register_axes_) axes_.master_lost(now_us);
+  else axes_.advance(now_us);
+  for (auto& p : profiles_) p->master_lost(now_us);
   publish();
 }
 

@@ -71,6 +71,7 @@ class Device final : private Application {
   AxisBank axes_;
   std::vector<std::unique_ptr<Profile>> profiles_;  // called in this order
   uint64_t frame_arrival_us_ = 0;  // the frame being handled (0: none, or unknown)
+  bool register_axes_ = true;      // Horner or HP: the register front ends' master-lost rule
 };
 
 }  // namespace stepnode::node

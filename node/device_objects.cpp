@@ -4,6 +4,7 @@
 
 #include "node/diagnostic_objects.hpp"
 #include "od/cob_id.hpp"
+#include "node/profiles/cia402/objects.hpp"
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/hp44714a/objects.hpp"
 #include "node/profiles/sim/objects.hpp"
@@ -11,13 +12,18 @@
 
 namespace stepnode::node {
 
-unsigned DeviceLayout::pdos() const { return horner::kPdosPerAxis * axes; }
+unsigned DeviceLayout::register_pdos() const {
+  return horner || hp || !cia402 ? horner::kPdosPerAxis * axes : 0;
+}
+
+unsigned DeviceLayout::pdos() const { return register_pdos() + (cia402 ? 2 * axes : 0); }
 
 std::string DeviceLayout::description() const {
   std::string out;
   auto add = [&out](const char* what) { out += (out.empty() ? "" : ", ") + std::string(what); };
   if (horner) add(spm30_multiplexed ? "Horner (SPM30 multiplexed)" : "Horner");
   if (hp) add("HP 44714A");
+  if (cia402) add("CiA 402");
   if (user) add("user objects");
   if (out.empty()) out = "no profile";
   return out + "; " + std::to_string(axes) + (axes == 1 ? " axis" : " axes") + " on the simulated machine";
@@ -32,6 +38,14 @@ void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout)
   if (layout.user) user::add_objects(dictionary);
   if (layout.horner) horner::add_objects(dictionary, layout.axes);
   if (layout.hp) hp44714a::add_objects(dictionary, layout.axes);
+  if (layout.cia402) {
+    cia402::add_objects(dictionary, layout.axes);
+    for (unsigned a = 0; a < layout.axes; ++a)
+      cia402::set_default_pdos(dictionary, a, layout.cia402_first_pdo(a), layout.cia402_first_pdo(a));
+    // 1000h: a CiA 402 stepper drive (each axis' 67FFh says the same).
+    od::Entry& type = dictionary.at(0x1000, 0);
+    type.default_value = type.value = od::encode<uint32_t>(cia402::kDeviceTypeStepper);
+  }
   // The simulated machine is the back end of every axis.
   sim::add_objects(dictionary, layout.motors());
   // A PDO no profile of this device maps starts invalid (COB-ID bit 31), as the PDOs of

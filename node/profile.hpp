@@ -20,6 +20,9 @@ class Profile {
   virtual void publish() {}
   // A SYNC (TRIG SYS), received at `frame_us` <= now_us (its arrival on the bus).
   virtual void sync(uint64_t /*now_us*/, uint64_t /*frame_us*/) {}
+  // The master was lost (heartbeat, bus-off, NMT Stopped): the profile's own reaction
+  // (CiA 402: 6007h), after the register front ends' ramp-down.
+  virtual void master_lost(uint64_t /*now_us*/) {}
 };
 
 }  // namespace stepnode::node

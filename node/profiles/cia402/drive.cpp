@@ -289,6 +289,18 @@ void Drive::emergency_stop(Tick when, bool was_moving) {
   notify();
 }
 
+void Drive::fault(uint16_t error_code, Tick now) {
+  core_.advance_to(now);
+  carry_out(machine_.fault(error_code), now);
+  notify();
+}
+
+void Drive::connection_lost(int16_t option_6007, Tick now) {
+  core_.advance_to(now);
+  carry_out(machine_.abort_connection(option_6007), now);
+  notify();
+}
+
 void Drive::advance(Tick now) { core_.advance_to(now); }
 
 void Drive::advanced(Tick now) {

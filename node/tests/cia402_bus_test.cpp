@@ -1,0 +1,140 @@
+// A CiA 402 only device driven as a standard master drives it, with the frames written from
+// the standards: CiA 301 pre-defined connection set (RPDO1 0x200+id, RPDO2 0x300+id, TPDO1
+// 0x180+id, TPDO2 0x280+id), CiA 402's default PDOs (RPDO1 {6040h, 6060h}, RPDO2 {607Ah,
+// 60FFh}, TPDO1 {6041h, 6061h}, TPDO2 {6064h, 606Ch}), the device control sequence
+// (06h, 07h, 0Fh) and the profile position set-point handshake (bit 4 -> bit 12).
+#include <gtest/gtest.h>
+
+#include <optional>
+
+#include "node/tests/node_harness.hpp"
+
+namespace stepnode::node::test {
+namespace {
+
+class Cia402Bus : public NodeHarness {
+ protected:
+  void SetUp() override {
+    make(DeviceLayout{.axes = 2, .horner = false, .hp = false, .user = false, .cia402 = true});
+    nmt(0x01);  // NMT start: the PDOs run
+    advance_ms(2);
+  }
+  // RPDO1: controlword (U16) and modes of operation (I8).
+  void rpdo1(uint16_t controlword, int8_t mode) {
+    frame(CanFrame(0x200 + kId, {static_cast<uint8_t>(controlword), static_cast<uint8_t>(controlword >> 8),
+                                 static_cast<uint8_t>(mode)}));
+  }
+  // RPDO2: target position (I32) and target velocity (I32).
+  void rpdo2(int32_t position, int32_t velocity) {
+    auto b = [](int32_t v, int k) { return static_cast<uint8_t>(static_cast<uint32_t>(v) >> (8 * k)); };
+    frame(CanFrame(0x300 + kId, {b(position, 0), b(position, 1), b(position, 2), b(position, 3), b(velocity, 0),
+                                 b(velocity, 1), b(velocity, 2), b(velocity, 3)}));
+  }
+  // The last TPDO1 sent: statusword and modes display.
+  std::optional<std::pair<uint16_t, int8_t>> last_tpdo1() {
+    for (size_t i = sent.size(); i-- > 0;)
+      if (sent[i].id == 0x180 + kId && sent[i].dlc == 3)
+        return std::pair<uint16_t, int8_t>{static_cast<uint16_t>(sent[i].data[0] | sent[i].data[1] << 8),
+                                           static_cast<int8_t>(sent[i].data[2])};
+    return std::nullopt;
+  }
+  std::optional<int32_t> last_position() {
+    for (size_t i = sent.size(); i-- > 0;)
+      if (sent[i].id == 0x280 + kId && sent[i].dlc == 8)
+        return static_cast<int32_t>(sent[i].data[0] | sent[i].data[1] << 8 | sent[i].data[2] << 16 |
+                                    static_cast<uint32_t>(sent[i].data[3]) << 24);
+    return std::nullopt;
+  }
+  uint16_t statusword() { return last_tpdo1().value().first & 0x7FFF; }
+};
+
+TEST_F(Cia402Bus, TheDeviceSaysItIsACia402StepperWithPpAndPv) {
+  EXPECT_EQ(*sdo_read(0x1000, 0), 0x00040192u);
+  EXPECT_EQ(*sdo_read(0x67FF, 0), 0x00040192u);
+  EXPECT_EQ(*sdo_read(0x6FFF, 0), 0x00040192u);  // axis 2 at + 0x800
+  EXPECT_EQ(*sdo_read(0x6502, 0), 0x00000005u);  // pp, pv
+  // The default PDOs' COB-IDs are the pre-defined ones, valid.
+  EXPECT_EQ(*sdo_read(0x1400, 1), 0x200u + kId);
+  EXPECT_EQ(*sdo_read(0x1401, 1), 0x300u + kId);
+  EXPECT_EQ(*sdo_read(0x1800, 1) & 0x800007FFu, 0x180u + kId);
+  EXPECT_EQ(*sdo_read(0x1801, 1) & 0x800007FFu, 0x280u + kId);
+  EXPECT_EQ(*sdo_read(0x1600, 1), 0x60400010u);
+  EXPECT_EQ(*sdo_read(0x1600, 2), 0x60600008u);
+  EXPECT_EQ(*sdo_read(0x1A01, 1), 0x60640020u);
+  // A mode the drive does not run is refused with the value-range abort.
+  EXPECT_EQ(sdo_write(0x6060, 0, 8, 1), 0x06090030u);
+}
+
+TEST_F(Cia402Bus, AMasterEnablesTheDriveAndMovesItInProfilePosition) {
+  // Switch on disabled after the start (6041h x1xx 0000).
+  rpdo1(0x0000, 1);
+  advance_ms(2);
+  EXPECT_EQ(*sdo_read(0x6061, 0), 1u);  // modes display: PP
+  EXPECT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x40u);
+  rpdo1(0x0006, 1);  // shutdown
+  advance_ms(2);
+  EXPECT_EQ(statusword() & 0x6F, 0x21);  // ready to switch on
+  rpdo1(0x0007, 1);  // switch on
+  advance_ms(2);
+  EXPECT_EQ(statusword() & 0x6F, 0x23);  // switched on
+  rpdo1(0x000F, 1);  // enable operation
+  advance_ms(2);
+  EXPECT_EQ(statusword() & 0x6F, 0x27);  // operation enabled
+  EXPECT_EQ(last_tpdo1()->second, 1);
+
+  ASSERT_EQ(sdo_write(0x6081, 0, 2000), 0u);  // profile velocity, steps/s (1:1 factors)
+  ASSERT_EQ(sdo_write(0x6083, 0, 20000), 0u);
+  ASSERT_EQ(sdo_write(0x6084, 0, 20000), 0u);
+  rpdo2(1500, 0);
+  rpdo1(0x001F, 1);  // new set-point
+  advance_ms(2);
+  EXPECT_TRUE(statusword() & 0x1000);   // set-point acknowledge
+  EXPECT_FALSE(statusword() & 0x0400);  // target not reached
+  rpdo1(0x000F, 1);
+  advance_ms(2);
+  EXPECT_FALSE(statusword() & 0x1000);
+  advance_ms(1000);  // 0.1 s up, 0.65 s at 2000 steps/s, 0.1 s down
+  EXPECT_TRUE(statusword() & 0x0400);  // target reached
+  EXPECT_EQ(*sdo_read(0x6064, 0), 1500u);
+  EXPECT_EQ(last_position().value_or(0), 1500);
+  // Axis 2 did not move.
+  EXPECT_EQ(*sdo_read(0x6864, 0), 0u);
+}
+
+TEST_F(Cia402Bus, ProfileVelocityOverPdosAndQuickStop) {
+  ASSERT_EQ(sdo_write(0x6083, 0, 10000), 0u);  // 0.1 s to 1000 steps/s
+  rpdo1(0x0006, 3);
+  rpdo1(0x0007, 3);
+  rpdo1(0x000F, 3);
+  advance_ms(2);
+  EXPECT_EQ(*sdo_read(0x6061, 0), 3u);
+  rpdo2(0, 1000);  // target velocity 1000 steps/s
+  advance_ms(300);
+  EXPECT_EQ(*sdo_read(0x606C, 0), 1000u);
+  EXPECT_TRUE(statusword() & 0x0400);  // velocity reached
+  rpdo1(0x000B, 3);                    // quick stop
+  advance_ms(2);
+  advance_ms(200);
+  EXPECT_EQ(statusword() & 0x6F, 0x40);  // 605Ah = 2: switch on disabled after the ramp
+  EXPECT_EQ(*sdo_read(0x606C, 0), 0u);
+}
+
+TEST_F(Cia402Bus, ALostMasterIsAFaultWithEmcy8130By6007) {
+  ASSERT_EQ(sdo_write(0x1016, 1, (0x7Fu << 16) | 100), 0u);  // watch node 127, 100 ms
+  frame(CanFrame(0x700 + 0x7F, {0x05}));
+  rpdo1(0x0006, 3);
+  rpdo1(0x0007, 3);
+  rpdo1(0x000F, 3);
+  rpdo2(0, 500);
+  advance_ms(50);
+  sent.clear();
+  advance_ms(200);  // the master's heartbeat stops
+  EXPECT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x08u);  // fault (6007h = 1)
+  EXPECT_EQ(*sdo_read(0x603F, 0), 0x8130u);
+  bool emcy = false;
+  for (const CanFrame& f : sent) emcy |= f.id == kEmcyId && f.data[0] == 0x30 && f.data[1] == 0x81;
+  EXPECT_TRUE(emcy);
+}
+
+}  // namespace
+}  // namespace stepnode::node::test
