@@ -52,7 +52,7 @@ TEST_F(Cia402Bus, TheDeviceSaysItIsACia402StepperWithPpAndPv) {
   EXPECT_EQ(*sdo_read(0x1000, 0), 0x00040192u);
   EXPECT_EQ(*sdo_read(0x67FF, 0), 0x00040192u);
   EXPECT_EQ(*sdo_read(0x6FFF, 0), 0x00040192u);  // axis 2 at + 0x800
-  EXPECT_EQ(*sdo_read(0x6502, 0), 0x00000005u);  // pp, pv
+  EXPECT_EQ(*sdo_read(0x6502, 0), 0x00000025u);  // pp, pv, hm
   // The default PDOs' COB-IDs are the pre-defined ones, valid.
   EXPECT_EQ(*sdo_read(0x1400, 1), 0x200u + kId);
   EXPECT_EQ(*sdo_read(0x1401, 1), 0x300u + kId);

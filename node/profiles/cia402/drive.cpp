@@ -34,6 +34,8 @@ void Drive::power_up(Tick now) {
   velocity_after_stop_.reset();
   in_window_since_.reset();
   target_reached_ = true;
+  homing_ = Homing::Idle;
+  search_stopping_ = false;
   last_status_ = statusword();
 }
 
@@ -71,6 +73,7 @@ void Drive::carry_out(Stop stop, Tick now) {
   next_.reset();
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
+  if (homing_ == Homing::InProgress) homing_ = Homing::Idle;  // interrupted
   if (machine_.stopping()) {
     stopping_for_machine_ = true;
     if (!core_.moving()) stopped(now);
@@ -95,6 +98,9 @@ void Drive::controlword(uint16_t cw, Tick now) {
   if (machine_.operation_enabled()) {
     const bool halt_now = (cw & cw::kHalt) != 0;
     if (halt_now != halted_) halt(halt_now, now);
+    if (mode_display_ == Mode::Homing && !halted_ && (cw & kHomingOperationStart) &&
+        !(previous & kHomingOperationStart))
+      start_homing(now);
     if (mode_display_ == Mode::ProfilePosition && !halted_ && (cw & cw_pp::kNewSetPoint) &&
         !(previous & cw_pp::kNewSetPoint))
       new_set_point(cw, now);
@@ -133,6 +139,7 @@ void Drive::set_target_velocity(int32_t steps_per_s, Tick now) {
 void Drive::halt(bool on, Tick now) {
   halted_ = on;
   if (!on || !core_.owned_by(*this)) return;
+  if (homing_ == Homing::InProgress) homing_ = Homing::Idle;  // interrupted
   // 605Dh: the motion stops and the drive stays in Operation enabled; a PP set-point is
   // given up (a new one is needed after the halt), PV resumes its target when released.
   active_.reset();
@@ -241,6 +248,7 @@ void Drive::velocity_to(int64_t target, Tick now) {
 // ---- the core's events ----------------------------------------------------------------
 
 void Drive::after_step(const motion::Step& step) {
+  if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
   const bool limit = step.direction < 0 ? core_.motor().lower_limit() : core_.motor().upper_limit();
   if (!limit) return;
@@ -254,6 +262,11 @@ void Drive::after_step(const motion::Step& step) {
 
 void Drive::motion_ended(Tick when) {
   if (stopping_for_machine_) return;  // advanced() completes the transition
+  if (homing_ == Homing::InProgress && search_stopping_) {
+    search_stopping_ = false;
+    ++search_;
+    return run_search(when);
+  }
   if (restart_after_stop_ && active_) {
     restart_after_stop_ = false;
     return start_positioning(*active_, when);
@@ -277,6 +290,7 @@ void Drive::motion_ended(Tick when) {
 
 void Drive::aborted(Tick when) {
   (void)when;
+  if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
   active_.reset();
   next_.reset();
   restart_after_stop_ = false;
@@ -353,9 +367,88 @@ uint16_t Drive::statusword() const {
       if (!moving) s |= sw_mode::kSpeedZero;
       break;
     }
+    case Mode::Homing:
+      // CiA 402-2 homing status: 13/12/10 = 0/0/1 not started or interrupted, 0/0/0 in
+      // progress, 0/1/1 completed, 1/0/x error (bit 10: the velocity is 0).
+      switch (homing_) {
+        case Homing::Idle: s |= core_.owned_by(*this) ? 0 : sw::kTargetReached; break;
+        case Homing::InProgress: break;
+        case Homing::Attained: s |= sw_mode::kHomingAttained | sw::kTargetReached; break;
+        case Homing::Error: s |= sw_mode::kHomingError | (core_.moving() ? 0 : sw::kTargetReached); break;
+      }
+      break;
     default: break;
   }
   return s;
+}
+
+// ---- homing ---------------------------------------------------------------------------
+
+HomingInputs Drive::homing_inputs() const {
+  const motion::MotorPort& m = core_.motor();
+  return HomingInputs{m.lower_limit(), m.upper_limit(), m.home(), m.marker()};
+}
+
+void Drive::start_homing(Tick now) {
+  if (core_.busy()) return;  // another front end's job, or still stopping
+  auto plan = homing_plan(parameters_.homing_method, core_.motor().home());
+  if (!plan) {
+    homing_ = Homing::Error;  // 6098h names no method this drive performs
+    return;
+  }
+  searches_ = std::move(*plan);
+  search_ = 0;
+  search_stopping_ = false;
+  homing_ = Homing::InProgress;
+  if (searches_.empty()) return homing_done(true, now);  // 35, 37: here
+  run_search(now);
+}
+
+void Drive::run_search(Tick now) {
+  if (search_ >= searches_.size()) return homing_done(false, now);
+  const HomingSearch& s = searches_[search_];
+  const uint32_t speed = s.fast ? parameters_.homing_switch_speed : parameters_.homing_zero_speed;
+  const int64_t v = std::clamp<int64_t>(speed, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
+  const int64_t acc = std::max<uint32_t>(parameters_.homing_acceleration, 1);
+  grid_ = motion::profile_levels_per_hz(acc);
+  last_inputs_ = homing_inputs();
+  if (!core_.start(*this, motion::profile_ramp(v, acc, acc, grid_), s.direction, std::nullopt, now))
+    homing_ = Homing::Idle;
+}
+
+void Drive::homing_step(const motion::Step& step) {
+  const HomingInputs in = homing_inputs();
+  const HomingInputs before = last_inputs_;
+  last_inputs_ = in;
+  if (search_stopping_) return;  // ramping down after an edge: the next search looks again
+  const HomingSearch& s = searches_[search_];
+  if (happened(s.until, before, in)) {
+    switch (s.then) {
+      case HomingSearch::Then::Stop:
+        search_stopping_ = true;
+        return core_.stop(step.time);
+      case HomingSearch::Then::Continue:
+        ++search_;
+        return;
+      case HomingSearch::Then::Home:
+        core_.halt(*this, step.time);
+        return homing_done(true, step.time);
+    }
+  }
+  // A limit switch the search does not look for: the method cannot be performed here.
+  const bool limit = step.direction < 0 ? in.negative_limit : in.positive_limit;
+  const bool wanted = s.until == (step.direction < 0 ? HomingEvent::NegativeLimitOn : HomingEvent::PositiveLimitOn);
+  if (limit && !wanted) {
+    core_.halt(*this, step.time);
+    homing_done(false, step.time);
+  }
+}
+
+void Drive::homing_done(bool ok, Tick now) {
+  (void)now;
+  homing_ = ok ? Homing::Attained : Homing::Error;
+  // The home position is the home offset (607Ch): position actual reads it there.
+  if (ok) core_.set_position(parameters_.home_offset);
 }
 
 void Drive::notify() {

@@ -11,6 +11,7 @@
 
 #include "node/motion/axis_core.hpp"
 #include "node/profiles/cia402/drive_state.hpp"
+#include "node/profiles/cia402/homing.hpp"
 
 namespace stepnode::cia402 {
 
@@ -26,7 +27,9 @@ enum class Mode : int8_t {
 };
 
 // The modes this drive runs today; 6060h refuses the others.
-constexpr bool runs(Mode m) { return m == Mode::ProfilePosition || m == Mode::ProfileVelocity; }
+constexpr bool runs(Mode m) {
+  return m == Mode::ProfilePosition || m == Mode::ProfileVelocity || m == Mode::Homing;
+}
 
 // Controlword bits 4..9, mode-specific (CiA 402-2 "Profile position mode": 6040h bits).
 namespace cw_pp {
@@ -40,7 +43,11 @@ namespace sw_mode {
 constexpr uint16_t kSetPointAcknowledge = 1u << 12;  // PP
 constexpr uint16_t kFollowingError = 1u << 13;       // PP
 constexpr uint16_t kSpeedZero = 1u << 12;            // PV
+constexpr uint16_t kHomingAttained = 1u << 12;       // HM
+constexpr uint16_t kHomingError = 1u << 13;          // HM
 }  // namespace sw_mode
+// Controlword bit 4 in homing mode: the rising edge starts the homing (CiA 402-2).
+constexpr uint16_t kHomingOperationStart = 1u << 4;
 
 // The profile (6067h..6085h, 607Dh) in steps, steps/s and steps/s^2.
 struct Parameters {
@@ -53,6 +60,11 @@ struct Parameters {
   uint16_t position_window_time_ms = 0;     // 6068h
   int32_t min_position_limit = INT32_MIN;   // 607Dh:1
   int32_t max_position_limit = INT32_MAX;   // 607Dh:2
+  int8_t homing_method = 0;                 // 6098h
+  uint32_t homing_switch_speed = 1'000;     // 6099h:1
+  uint32_t homing_zero_speed = 100;         // 6099h:2
+  uint32_t homing_acceleration = 1'000;     // 609Ah
+  int32_t home_offset = 0;                  // 607Ch: the position of the home position
 };
 
 class Drive final : public motion::FrontEnd, public motion::AxisListener {
@@ -112,6 +124,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void start_positioning(const SetPoint& sp, motion::Tick now);
   void velocity_to(int64_t target, motion::Tick now);
   void halt(bool on, motion::Tick now);
+  void start_homing(motion::Tick now);
+  void run_search(motion::Tick now);
+  void homing_step(const motion::Step& step);
+  void homing_done(bool ok, motion::Tick now);
+  HomingInputs homing_inputs() const;
   motion::RampSpec ramp(uint32_t velocity) const;
   motion::Rational quick_stop_slope() const;
   int64_t clamp_to_limits(int64_t target);
@@ -142,6 +159,14 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // PV: a reversal runs as a stop, then a start the other way.
   std::optional<int64_t> velocity_after_stop_;
   uint16_t last_status_ = 0;
+
+  // HM: the searches of the method being performed and where it is.
+  enum class Homing : uint8_t { Idle, InProgress, Attained, Error };
+  Homing homing_ = Homing::Idle;  // Idle: not started, or interrupted
+  std::vector<HomingSearch> searches_;
+  size_t search_ = 0;
+  bool search_stopping_ = false;  // a Stop search's ramp runs; the next begins at its end
+  HomingInputs last_inputs_;
 };
 
 }  // namespace stepnode::cia402

@@ -45,9 +45,10 @@ void Cia402Service::install_hooks(unsigned a) {
     publish(a);
   });
   for (uint16_t base : {kMaxProfileVelocity, kProfileVelocity, kProfileAcceleration, kProfileDeceleration,
-                        kQuickStopDeceleration, kPositionWindow, kPositionWindowTime})
+                        kQuickStopDeceleration, kPositionWindow, kPositionWindowTime, kHomingMethod,
+                        kHomingAcceleration, kHomeOffset})
     od::listen(entry(base), [this, a] { load_parameters(a); });
-  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant})
+  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant, kHomingSpeeds})
     for (uint8_t sub : {uint8_t{1}, uint8_t{2}}) od::listen(entry(base, sub), [this, a] { load_parameters(a); });
   for (uint16_t base : {kQuickStopOption, kShutdownOption, kDisableOperationOption, kHaltOption, kFaultReactionOption})
     od::listen(entry(base), [this, a] { load_options(a); });
@@ -74,6 +75,11 @@ void Cia402Service::load_parameters(unsigned a) {
   const int32_t high = dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMax);
   p.min_position_limit = to_i32(un.to_steps(low));
   p.max_position_limit = to_i32(un.to_steps(high));
+  p.homing_method = dictionary_.get<int8_t>(index(a, kHomingMethod), 0);
+  p.homing_switch_speed = to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kSwitchSearch)));
+  p.homing_zero_speed = to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch)));
+  p.homing_acceleration = to_u32(un.to_steps(u32(kHomingAcceleration)));
+  p.home_offset = to_i32(un.to_steps(dictionary_.get<int32_t>(index(a, kHomeOffset), 0)));
 }
 
 void Cia402Service::load_options(unsigned a) {
