@@ -25,6 +25,8 @@ class Application {
   // A communication error, before 0x1029's change of NMT state. `node`: the monitored node
   // whose heartbeat was lost (0 for a bus-off).
   virtual void communication_error(CommunicationError /*error*/, uint8_t /*node*/, uint64_t /*now_us*/) {}
+  // The heartbeat of monitored node `node` is back (or it is no longer watched).
+  virtual void heartbeat_recovered(uint8_t /*node*/, uint64_t /*now_us*/) {}
 };
 
 }  // namespace stepnode::node

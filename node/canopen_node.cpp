@@ -43,6 +43,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                         [this](uint8_t node, uint64_t now) {
                           spdlog::info("heartbeat of node {} is back (or no longer watched)", node);
                           if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          if (app_) app_->heartbeat_recovered(node, now);
                         },
                     .remote_reset = nullptr}),
       sync_(

@@ -99,6 +99,11 @@ void Device::communication_error(CommunicationError error, uint8_t node, uint64_
   master_lost(now_us);
 }
 
+void Device::heartbeat_recovered(uint8_t node, uint64_t now_us) {
+  if (!is_master(node)) return;
+  for (auto& p : profiles_) p->master_back(now_us);
+}
+
 bool Device::is_master(uint8_t node) {
   const uint8_t master = canopen_.dictionary().get<uint8_t>(kMasterNodeId, 0);
   return master == 0 || master == node;

@@ -23,6 +23,8 @@ class Profile {
   // The master was lost (heartbeat, bus-off, NMT Stopped): the profile's own reaction
   // (CiA 402: 6007h), after the register front ends' ramp-down.
   virtual void master_lost(uint64_t /*now_us*/) {}
+  // The master's heartbeat is back.
+  virtual void master_back(uint64_t /*now_us*/) {}
 };
 
 }  // namespace stepnode::node

@@ -123,6 +123,7 @@ class AxisCore {
     generator_.change_velocity(at, level, std::move(then));
   }
   void regrid(Tick at, const RampSpec& ramp) { generator_.regrid(at, ramp); }
+  void set_level(Tick at, int64_t level) { generator_.set_level(at, level); }
   void retarget(Tick at, int64_t steps, const RampSpec& ramp) { generator_.retarget(at, steps, ramp); }
 
   // --- State ---------------------------------------------------------------------------

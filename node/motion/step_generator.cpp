@@ -270,6 +270,18 @@ void StepGenerator::reached_velocity() {
   adopt(ramp, ramp.run_level);
 }
 
+void StepGenerator::set_level(Tick at, int64_t level) {
+  if (phase_ == MotionPhase::Idle) return;
+  advance_to(at);
+  level_ = std::max<int64_t>(level, 1);
+  ramp_.base_level = ramp_.run_level = level_;  // a constant velocity: nothing to ramp
+  ramp_.min_creep_level = level_;
+  phase_ = MotionPhase::Creeping;
+  stopping_ = holding_ = false;
+  then_.reset();
+  distance_.reset();
+}
+
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);

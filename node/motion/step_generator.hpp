@@ -47,6 +47,10 @@ class StepGenerator {
   // the current grid cannot express: an HP SUSTAIN from a few µHz (levels of µHz) up to
   // kHz would take one level per tick, hundreds of millions of them.
   void regrid(Tick at, const RampSpec& ramp);
+  // From time `at`, run at `level` (>= 1) on the same grid at once, no ramp, the phase
+  // accumulator keeping its fraction of a step (CiA 402 cyclic velocity: a new velocity
+  // every SYNC, no step gained or lost at the change).
+  void set_level(Tick at, int64_t level);
   // From time `at`, end the move `steps` steps from here and decelerate with `ramp`'s
   // deceleration (indexed move: the index input moved the end point). The velocity and
   // phase carry on; if the new end is too close to ramp down, the ramp starts at once.

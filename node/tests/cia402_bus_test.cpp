@@ -52,7 +52,7 @@ TEST_F(Cia402Bus, TheDeviceSaysItIsACia402StepperWithPpAndPv) {
   EXPECT_EQ(*sdo_read(0x1000, 0), 0x00040192u);
   EXPECT_EQ(*sdo_read(0x67FF, 0), 0x00040192u);
   EXPECT_EQ(*sdo_read(0x6FFF, 0), 0x00040192u);  // axis 2 at + 0x800
-  EXPECT_EQ(*sdo_read(0x6502, 0), 0x00000025u);  // pp, pv, hm
+  EXPECT_EQ(*sdo_read(0x6502, 0), 0x000001E5u);  // pp, pv, hm, ip, csp, csv
   // The default PDOs' COB-IDs are the pre-defined ones, valid.
   EXPECT_EQ(*sdo_read(0x1400, 1), 0x200u + kId);
   EXPECT_EQ(*sdo_read(0x1401, 1), 0x300u + kId);
@@ -61,8 +61,8 @@ TEST_F(Cia402Bus, TheDeviceSaysItIsACia402StepperWithPpAndPv) {
   EXPECT_EQ(*sdo_read(0x1600, 1), 0x60400010u);
   EXPECT_EQ(*sdo_read(0x1600, 2), 0x60600008u);
   EXPECT_EQ(*sdo_read(0x1A01, 1), 0x60640020u);
-  // A mode the drive does not run is refused with the value-range abort.
-  EXPECT_EQ(sdo_write(0x6060, 0, 8, 1), 0x06090030u);
+  // A mode the drive does not run (profile torque) is refused with the value-range abort.
+  EXPECT_EQ(sdo_write(0x6060, 0, 4, 1), 0x06090030u);
 }
 
 TEST_F(Cia402Bus, AMasterEnablesTheDriveAndMovesItInProfilePosition) {
@@ -134,6 +134,19 @@ TEST_F(Cia402Bus, ALostMasterIsAFaultWithEmcy8130By6007) {
   bool emcy = false;
   for (const CanFrame& f : sent) emcy |= f.id == kEmcyId && f.data[0] == 0x30 && f.data[1] == 0x81;
   EXPECT_TRUE(emcy);
+  // CiA 402-2 transition 15: no fault reset while the cause persists (no master)... (over
+  // SDO: 1029h's default took the node to pre-operational, where no RPDO is received)
+  ASSERT_EQ(sdo_write(0x6040, 0, 0x0000, 2), 0u);
+  ASSERT_EQ(sdo_write(0x6040, 0, 0x0080, 2), 0u);
+  advance_ms(2);
+  EXPECT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x08u);
+  // ...and one once the master's heartbeat is back.
+  frame(CanFrame(0x700 + 0x7F, {0x05}));
+  ASSERT_EQ(sdo_write(0x6040, 0, 0x0000, 2), 0u);
+  ASSERT_EQ(sdo_write(0x6040, 0, 0x0080, 2), 0u);
+  advance_ms(2);
+  EXPECT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x40u);
+  EXPECT_EQ(*sdo_read(0x603F, 0), 0u);
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ void Drive::power_up(Tick now) {
   target_reached_ = true;
   homing_ = Homing::Idle;
   search_stopping_ = false;
+  connection_lost_ = false;
   last_status_ = statusword();
 }
 
@@ -73,6 +74,7 @@ void Drive::carry_out(Stop stop, Tick now) {
   next_.reset();
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
+  csv_running_ = false;
   if (homing_ == Homing::InProgress) homing_ = Homing::Idle;  // interrupted
   if (machine_.stopping()) {
     stopping_for_machine_ = true;
@@ -311,6 +313,9 @@ void Drive::fault(uint16_t error_code, Tick now) {
 
 void Drive::connection_lost(int16_t option_6007, Tick now) {
   core_.advance_to(now);
+  // 6007h 1 (or another value: as 1) makes the loss a fault whose cause persists.
+  connection_lost_ = option_6007 != option::kAbortNoAction && option_6007 != option::kAbortDisableVoltage &&
+                     option_6007 != option::kAbortQuickStop;
   carry_out(machine_.abort_connection(option_6007), now);
   notify();
 }
@@ -319,7 +324,11 @@ void Drive::advance(Tick now) { core_.advance_to(now); }
 
 void Drive::advanced(Tick now) {
   if (stopping_for_machine_ && !core_.moving()) stopped(now);
-  machine_.set_fault_condition_active(core_.estop_active());
+  check_following_error(now);
+  // 6062h: the interpolated trajectory in CSP and IP; otherwise (open loop) the steps given.
+  const bool interpolating = mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
+  demand_ = interpolating && core_.owned_by(*this) ? static_cast<int32_t>(cyclic_demand(now)) : core_.position();
+  machine_.set_fault_condition_active(core_.estop_active() || connection_lost_);
   // Target reached (PP): the trajectory is at the target and has been inside the position
   // window (6067h) for the window time (6068h); halted: the velocity is 0.
   const Tick window = static_cast<Tick>(parameters_.position_window_time_ms) * motion::kClockHz / 1000;
@@ -331,8 +340,6 @@ void Drive::advanced(Tick now) {
 }
 
 // ---- what the master reads ----------------------------------------------------------
-
-int32_t Drive::position_demand() const { return core_.position(); }  // open loop: the steps given
 
 int32_t Drive::velocity_actual() const {
   const motion::StepGenerator& g = core_.generator();
@@ -376,6 +383,20 @@ uint16_t Drive::statusword() const {
         case Homing::Attained: s |= sw_mode::kHomingAttained | sw::kTargetReached; break;
         case Homing::Error: s |= sw_mode::kHomingError | (core_.moving() ? 0 : sw::kTargetReached); break;
       }
+      break;
+    case Mode::CyclicSyncPosition:
+    case Mode::CyclicSyncVelocity: {
+      // Bit 12: the drive follows the command value (enabled, not halted, no other front
+      // end's job); bit 13 (CSP): following error.
+      const bool follows = machine_.operation_enabled() && !halted_ && (!core_.busy() || core_.owned_by(*this));
+      if (follows) s |= sw_mode::kDriveFollows;
+      if (following_error_ && mode_display_ == Mode::CyclicSyncPosition) s |= sw_mode::kFollowingError;
+      break;
+    }
+    case Mode::InterpolatedPosition:
+      if (machine_.operation_enabled() && (controlword_ & kEnableIp)) s |= sw_mode::kIpModeActive;
+      if (!core_.owned_by(*this) && core_.position() == seg_to_) s |= sw::kTargetReached;
+      if (following_error_) s |= sw_mode::kFollowingError;
       break;
     default: break;
   }

@@ -28,7 +28,11 @@ enum class Mode : int8_t {
 
 // The modes this drive runs today; 6060h refuses the others.
 constexpr bool runs(Mode m) {
-  return m == Mode::ProfilePosition || m == Mode::ProfileVelocity || m == Mode::Homing;
+  return m == Mode::ProfilePosition || m == Mode::ProfileVelocity || m == Mode::Homing ||
+         m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition || m == Mode::CyclicSyncVelocity;
+}
+constexpr bool cyclic(Mode m) {
+  return m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition || m == Mode::CyclicSyncVelocity;
 }
 
 // Controlword bits 4..9, mode-specific (CiA 402-2 "Profile position mode": 6040h bits).
@@ -45,7 +49,11 @@ constexpr uint16_t kFollowingError = 1u << 13;       // PP
 constexpr uint16_t kSpeedZero = 1u << 12;            // PV
 constexpr uint16_t kHomingAttained = 1u << 12;       // HM
 constexpr uint16_t kHomingError = 1u << 13;          // HM
+constexpr uint16_t kDriveFollows = 1u << 12;         // CSP, CSV: the command value is followed
+constexpr uint16_t kIpModeActive = 1u << 12;         // IP
 }  // namespace sw_mode
+// Controlword bit 4 in interpolated position mode: enable interpolation (CiA 402-2).
+constexpr uint16_t kEnableIp = 1u << 4;
 // Controlword bit 4 in homing mode: the rising edge starts the homing (CiA 402-2).
 constexpr uint16_t kHomingOperationStart = 1u << 4;
 
@@ -65,6 +73,9 @@ struct Parameters {
   uint32_t homing_zero_speed = 100;         // 6099h:2
   uint32_t homing_acceleration = 1'000;     // 609Ah
   int32_t home_offset = 0;                  // 607Ch: the position of the home position
+  motion::Tick interpolation_period = motion::kClockHz / 1000;  // 60C2h, until SYNCs are seen
+  uint32_t following_error_window = UINT32_MAX;  // 6065h (UINT32_MAX: off)
+  uint16_t following_error_timeout_ms = 0;       // 6066h
 };
 
 class Drive final : public motion::FrontEnd, public motion::AxisListener {
@@ -87,20 +98,27 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // ---- the drive's events
   // A fault (603Fh code): transition 13 and the 605Eh reaction.
   void fault(uint16_t error_code, motion::Tick now);
-  // The master was lost: the 6007h reaction.
+  // The master was lost: the 6007h reaction. While it is (a fault's cause persists, CiA
+  // 402-2 transition 15), a fault reset is refused; connection_restored() ends that.
   void connection_lost(int16_t option_6007, motion::Tick now);
+  void connection_restored() { connection_lost_ = false; }
   // Time passes: the position window time (6068h) runs out between steps.
   void advance(motion::Tick now);
+  // A SYNC that arrived on the bus at `arrival` and is handled at `now` (CSP, CSV, IP: the
+  // set-point written for this cycle takes effect; drive_cyclic.cpp).
+  void sync(motion::Tick now, motion::Tick arrival);
+  void set_ip_set_point(int32_t steps) { ip_set_point_ = steps; }  // 60C1h:1
 
   // ---- what the master reads
   uint16_t statusword() const;                        // 6041h
   Mode mode_display() const { return mode_display_; }  // 6061h
   State state() const { return machine_.state(); }
   uint16_t error_code() const { return machine_.error_code(); }  // 603Fh
-  int32_t position_demand() const;                    // 6062h: where the trajectory is
+  int32_t position_demand() const { return demand_; }  // 6062h: where the trajectory is
   int32_t position_actual() const { return core_.position(); }  // 6063h/6064h (open loop)
   int32_t velocity_actual() const;                    // 606Ch, steps/s signed
   uint32_t digital_inputs() const;                    // 60FDh
+  int32_t following_error() const { return following_error_value_; }  // 60F4h
   const DriveStateMachine& machine() const { return machine_; }
 
   // The statusword changed (an event-driven TPDO goes out).
@@ -129,6 +147,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void homing_step(const motion::Step& step);
   void homing_done(bool ok, motion::Tick now);
   HomingInputs homing_inputs() const;
+  void cyclic_position(int64_t target, motion::Tick now);
+  void cyclic_velocity(int64_t velocity, motion::Tick now);
+  void measure_cycle(motion::Tick arrival);
+  void check_following_error(motion::Tick now);
+  int64_t cyclic_demand(motion::Tick now) const;
   motion::RampSpec ramp(uint32_t velocity) const;
   motion::Rational quick_stop_slope() const;
   int64_t clamp_to_limits(int64_t target);
@@ -156,6 +179,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // A stop ramp the state machine waits for (quick stop, 605Ch/605Bh, fault reaction).
   bool stopping_for_machine_ = false;
   bool halted_ = false;
+  bool connection_lost_ = false;
   // PV: a reversal runs as a stop, then a start the other way.
   std::optional<int64_t> velocity_after_stop_;
   uint16_t last_status_ = 0;
@@ -167,6 +191,21 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   size_t search_ = 0;
   bool search_stopping_ = false;  // a Stop search's ramp runs; the next begins at its end
   HomingInputs last_inputs_;
+
+  // CSP / IP: the running segment, from seg_from_ at seg_start_ to seg_to_ in seg_ticks_
+  // (linear interpolation, one cycle behind the master's set-points); CSV: a constant
+  // velocity on a grid of its own (csv_running_). The cycle is measured from the SYNCs.
+  std::optional<motion::Tick> last_sync_;
+  motion::Tick cycle_ = 0;
+  bool cycle_measured_ = false;
+  int64_t seg_from_ = 0, seg_to_ = 0;
+  motion::Tick seg_start_ = 0, seg_ticks_ = 1;
+  bool csv_running_ = false;
+  int32_t ip_set_point_ = 0;
+  int32_t following_error_value_ = 0;
+  int32_t demand_ = 0;
+  std::optional<motion::Tick> following_error_since_;
+  bool following_error_ = false;
 };
 
 }  // namespace stepnode::cia402

@@ -181,10 +181,10 @@ void add_factor_and_ip_objects(AxisTable t) {
 }  // namespace
 
 bool mode_supported(int8_t m) {
-  // The modes the drive runs today (node/profiles/cia402/drive.hpp); IP, CSP and CSV join
-  // them (and 6502h) when the drive runs them.
+  // The modes the drive runs (node/profiles/cia402/drive.hpp), as 6502h says.
   using namespace mode;
-  return m == kNone || m == kProfilePosition || m == kProfileVelocity || m == kHoming;
+  return m == kNone || m == kProfilePosition || m == kProfileVelocity || m == kHoming ||
+         m == kInterpolatedPosition || m == kCyclicSyncPosition || m == kCyclicSyncVelocity;
 }
 
 void add_objects(od::Dictionary& od, unsigned axes) {

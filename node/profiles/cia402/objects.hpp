@@ -99,9 +99,10 @@ constexpr int8_t kNone = 0, kProfilePosition = 1, kProfileVelocity = 3, kHoming 
 bool mode_supported(int8_t mode);
 
 // 6502h: bit 0 pp, 2 pv, 5 hm, 6 ip, 7 csp, 8 csv (1 vl, 3 tq, 9 cst, 10 cstca not
-// supported). Honest: only the modes the drive runs today (pp, pv, hm); ip, csp and csv
-// (0x1E5 with them) are to come.
-constexpr uint32_t kSupportedDriveModesValue = (1u << 0) | (1u << 2) | (1u << 5);
+// supported): the modes the drive runs.
+constexpr uint32_t kSupportedDriveModesValue =
+    (1u << 0) | (1u << 2) | (1u << 5) | (1u << 6) | (1u << 7) | (1u << 8);
+static_assert(kSupportedDriveModesValue == 0x1E5);
 
 // 67FFh + 0x800 * axis, the device type of each axis: bits 0-15 the profile number 402
 // (0x192), bits 16-23 the type, bits 24-31 the mode bits (none). Type 04h is a stepper drive

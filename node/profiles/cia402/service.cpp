@@ -39,6 +39,10 @@ void Cia402Service::install_hooks(unsigned a) {
     publish(a);
   });
   od::listen(entry(kTargetPosition), [this, a] { load_targets(a); });
+  od::listen(entry(kInterpolationData, cia402::ip_data_sub::kSetPoint), [this, a] {
+    drives_[a]->set_ip_set_point(to_i32(units_[a].to_steps(
+        dictionary_.get<int32_t>(index(a, kInterpolationData), cia402::ip_data_sub::kSetPoint))));
+  });
   od::listen(entry(kTargetVelocity), [this, a] {
     drives_[a]->set_target_velocity(
         to_i32(units_[a].to_steps(dictionary_.get<int32_t>(index(a, kTargetVelocity), 0))), axes_.now());
@@ -46,9 +50,10 @@ void Cia402Service::install_hooks(unsigned a) {
   });
   for (uint16_t base : {kMaxProfileVelocity, kProfileVelocity, kProfileAcceleration, kProfileDeceleration,
                         kQuickStopDeceleration, kPositionWindow, kPositionWindowTime, kHomingMethod,
-                        kHomingAcceleration, kHomeOffset})
+                        kHomingAcceleration, kHomeOffset, kFollowingErrorWindow, kFollowingErrorTimeout})
     od::listen(entry(base), [this, a] { load_parameters(a); });
-  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant, kHomingSpeeds})
+  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant, kHomingSpeeds,
+                        kInterpolationPeriod})
     for (uint8_t sub : {uint8_t{1}, uint8_t{2}}) od::listen(entry(base, sub), [this, a] { load_parameters(a); });
   for (uint16_t base : {kQuickStopOption, kShutdownOption, kDisableOperationOption, kHaltOption, kFaultReactionOption})
     od::listen(entry(base), [this, a] { load_options(a); });
@@ -80,6 +85,17 @@ void Cia402Service::load_parameters(unsigned a) {
   p.homing_zero_speed = to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch)));
   p.homing_acceleration = to_u32(un.to_steps(u32(kHomingAcceleration)));
   p.home_offset = to_i32(un.to_steps(dictionary_.get<int32_t>(index(a, kHomeOffset), 0)));
+  const uint32_t fe_window = u32(kFollowingErrorWindow);
+  p.following_error_window = fe_window == UINT32_MAX ? UINT32_MAX : to_u32(un.to_steps(fe_window));
+  p.following_error_timeout_ms = dictionary_.get<uint16_t>(index(a, kFollowingErrorTimeout), 0);
+  // 60C2h: units * 10^index s.
+  double period = dictionary_.get<uint8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kUnits);
+  for (int8_t i = dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex); i < 0; ++i)
+    period /= 10;
+  for (int8_t i = dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex); i > 0; --i)
+    period *= 10;
+  p.interpolation_period = std::clamp<motion::Tick>(static_cast<motion::Tick>(period * motion::kClockHz), 1,
+                                                    motion::kClockHz);
 }
 
 void Cia402Service::load_options(unsigned a) {
@@ -129,6 +145,14 @@ void Cia402Service::master_lost(uint64_t) {
   }
 }
 
+void Cia402Service::sync(uint64_t now_us, uint64_t frame_us) {
+  for (auto& d : drives_) d->sync(axes_.ticks(now_us), axes_.ticks(frame_us));
+}
+
+void Cia402Service::master_back(uint64_t) {
+  for (auto& d : drives_) d->connection_restored();
+}
+
 void Cia402Service::publish() {
   for (unsigned a = 0; a < drives_.size(); ++a) publish(a);
 }
@@ -142,7 +166,7 @@ void Cia402Service::publish(unsigned a) {
   dictionary_.put<int32_t>(index(a, kPositionActualInternal), 0, d.position_actual());
   dictionary_.put<int32_t>(index(a, kPositionActual), 0, to_i32(un.to_units(d.position_actual())));
   dictionary_.put<int32_t>(index(a, kVelocityActual), 0, to_i32(un.to_units(d.velocity_actual())));
-  dictionary_.put<int32_t>(index(a, kFollowingErrorActual), 0, 0);  // open loop: the motor took every step
+  dictionary_.put<int32_t>(index(a, kFollowingErrorActual), 0, to_i32(un.to_units(d.following_error())));
   dictionary_.put<uint32_t>(index(a, kDigitalInputs), 0, d.digital_inputs());
   dictionary_.put<uint16_t>(index(a, kErrorCode), 0, d.error_code());
   report_fault(a);

@@ -28,6 +28,9 @@ class Cia402Service final : public Profile {
   void advance(uint64_t now_us) override;
   void publish() override;
   void master_lost(uint64_t now_us) override;
+  void master_back(uint64_t now_us) override;
+  // CSP, CSV, IP: the set-points of this cycle take effect (the SYNC's arrival times the cycle).
+  void sync(uint64_t now_us, uint64_t frame_us) override;
 
   cia402::Drive& drive(unsigned a) { return *drives_.at(a); }
 

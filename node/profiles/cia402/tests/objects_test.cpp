@@ -86,7 +86,7 @@ const std::vector<Row> kTable = {
     {0x60F4, 0, DT::Integer32, RO, true, false, 0},
     {0x60FD, 0, DT::Unsigned32, RO, true, false, 0},
     {0x60FF, 0, DT::Integer32, RW, true, false, 0},
-    {0x6502, 0, DT::Unsigned32, RO, false, false, 0x025},       // pp, pv, hm (the modes the drive runs)
+    {0x6502, 0, DT::Unsigned32, RO, false, false, 0x1E5},       // pp, pv, hm, ip, csp, csv
     {0x67FF, 0, DT::Unsigned32, RO, false, false, 0x00040192},  // profile 402, stepper drive
 };
 // The arrays and the record (the others are VARs), with their highest sub-index.
@@ -153,7 +153,7 @@ TEST_F(Cia402Objects, SampledValuesAreThePositionsAndVelocities) {
 }
 
 TEST_F(Cia402Objects, ModesOfOperationRefusesAModeThisDriveHasNot) {
-  const std::vector<int> supported = {0, 1, 3, 6};  // 6502h: pp, pv, hm
+  const std::vector<int> supported = {0, 1, 3, 6, 7, 8, 9};  // 6502h
   for (uint16_t index : {obj::index(0, 0x6060), obj::index(1, 0x6060)}) {
     for (int mode = -128; mode <= 127; ++mode) {
       const bool ok = std::find(supported.begin(), supported.end(), mode) != supported.end();
@@ -161,7 +161,7 @@ TEST_F(Cia402Objects, ModesOfOperationRefusesAModeThisDriveHasNot) {
       EXPECT_EQ(write<int8_t>(index, 0, static_cast<int8_t>(mode)), expected) << mode;
       EXPECT_EQ(mode_supported(static_cast<int8_t>(mode)), ok) << mode;
     }
-    EXPECT_EQ(od.get<int8_t>(index, 0), 6);  // the last mode accepted stays
+    EXPECT_EQ(od.get<int8_t>(index, 0), 9);  // the last mode accepted stays
   }
   // An RPDO carrying profile torque (4) is refused the same way.
   EXPECT_EQ(write<int8_t>(0x6060, 0, 4, od::WriteOrigin::Pdo), SdoAbort::InvalidValue);

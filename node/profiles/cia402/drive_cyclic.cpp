@@ -1,0 +1,131 @@
+// The cyclic modes of the CiA 402 drive (CiA 402-2 "Cyclic synchronous position mode",
+// "Cyclic synchronous velocity mode", "Interpolated position mode"): a set-point every SYNC.
+//
+// Interpolation (CSP, IP sub-mode 0): linear. The set-point a SYNC brings is reached one
+// cycle later: the axis moves from where it is to it at a constant rate, its n steps at
+// the exact ticks start + ceil(i * cycle / n) (the engine's phase accumulator with one step
+// = `cycle` phase units and n units a tick). A set-point a SYNC does not bring (a missed
+// SYNC) leaves the axis at the last one: no extrapolation, no jump. A SYNC before the
+// previous segment is done (jitter) folds its remaining steps into the new one. CSV: the
+// velocity changes at once at the SYNC, keeping the phase (no step gained or lost).
+#include <algorithm>
+#include <cstdlib>
+
+#include "node/profiles/cia402/drive.hpp"
+
+namespace stepnode::cia402 {
+
+using motion::Tick;
+
+namespace {
+
+constexpr uint16_t kFollowingErrorCode = 0x8611;  // CiA 402: following error
+
+int sign(int64_t v) { return v < 0 ? -1 : +1; }
+
+}  // namespace
+
+void Drive::measure_cycle(Tick arrival) {
+  // The cycle is the SYNC period as received (the master's 60C2h may not be written);
+  // 60C2h until two SYNCs are seen. An interval of twice the cycle or more is a missed
+  // SYNC, not a new period; jitter is averaged out.
+  if (cycle_ <= 0) cycle_ = std::max<Tick>(parameters_.interpolation_period, 1);
+  if (last_sync_) {
+    const Tick d = arrival - *last_sync_;
+    if (d > 0 && !cycle_measured_) cycle_ = d, cycle_measured_ = true;
+    else if (d > 0 && d < 2 * cycle_) cycle_ = (3 * cycle_ + d) / 4;
+  }
+  last_sync_ = arrival;
+}
+
+void Drive::sync(Tick now, Tick arrival) {
+  measure_cycle(arrival);
+  if (!machine_.operation_enabled() || halted_ || !cyclic(mode_display_)) return;
+  core_.advance_to(now);
+  switch (mode_display_) {
+    case Mode::CyclicSyncPosition: cyclic_position(target_position_, now); break;
+    case Mode::InterpolatedPosition:
+      if (controlword_ & kEnableIp) cyclic_position(ip_set_point_, now);
+      break;
+    case Mode::CyclicSyncVelocity: cyclic_velocity(target_velocity_, now); break;
+    default: break;
+  }
+  notify();
+}
+
+void Drive::cyclic_position(int64_t target, Tick now) {
+  if (core_.busy() && !core_.owned_by(*this)) return;  // another front end's job
+  target = clamp_to_limits(target);
+  csv_running_ = false;
+  const int64_t from = core_.position();
+  seg_from_ = from;
+  seg_to_ = target;
+  seg_start_ = now;
+  seg_ticks_ = std::max<Tick>(cycle_, 1);
+  int64_t steps = std::llabs(target - from);
+  if (steps == 0) {
+    if (core_.owned_by(*this)) core_.halt(*this, now);
+    return;
+  }
+  // No faster than 607Fh, and no more than a step a tick: beyond, the axis lags and the
+  // following error shows it.
+  const int64_t most = std::max<int64_t>(1, int64_t{parameters_.max_velocity} * seg_ticks_ / motion::kClockHz);
+  steps = std::min({steps, most, seg_ticks_});
+  motion::RampSpec r;
+  r.phase_per_step = seg_ticks_;
+  r.base_level = r.run_level = r.min_creep_level = steps;
+  r.accel_ticks_per_level = r.decel_ticks_per_level = motion::Rational{1, 1};
+  core_.start(*this, r, sign(target - from), steps, now);
+}
+
+void Drive::cyclic_velocity(int64_t velocity, Tick now) {
+  if (core_.busy() && !core_.owned_by(*this)) return;
+  velocity = std::clamp<int64_t>(velocity, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
+  const motion::StepGenerator& g = core_.generator();
+  if (velocity == 0) {
+    if (core_.owned_by(*this)) core_.halt(*this, now);
+    csv_running_ = false;
+    return;
+  }
+  if (csv_running_ && core_.owned_by(*this) && g.moving() && g.direction() == sign(velocity)) {
+    core_.set_level(now, std::llabs(velocity));
+    return;
+  }
+  if (core_.owned_by(*this)) core_.halt(*this, now);  // a reversal: at once, the master's ramp
+  motion::RampSpec r;  // one level a step/s: every whole velocity exact
+  r.phase_per_step = motion::kClockHz;
+  r.base_level = r.run_level = r.min_creep_level = std::llabs(velocity);
+  r.accel_ticks_per_level = r.decel_ticks_per_level = motion::Rational{1, 1};
+  csv_running_ = core_.start(*this, r, sign(velocity), std::nullopt, now);
+}
+
+int64_t Drive::cyclic_demand(Tick now) const {
+  // Where the interpolated trajectory is at `now` (6062h in CSP and IP).
+  if (now >= seg_start_ + seg_ticks_) return seg_to_;
+  if (now <= seg_start_) return seg_from_;
+  const __int128 done = static_cast<__int128>(seg_to_ - seg_from_) * (now - seg_start_);
+  return seg_from_ + static_cast<int64_t>(done / seg_ticks_);
+}
+
+void Drive::check_following_error(Tick now) {
+  const bool position_mode = mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
+  following_error_value_ = position_mode && machine_.operation_enabled()
+                               ? static_cast<int32_t>(cyclic_demand(now) - core_.position())
+                               : 0;
+  // 60F4h beyond 6065h for longer than 6066h: bit 13, and a fault (8611h).
+  const bool outside = parameters_.following_error_window != UINT32_MAX &&
+                       std::llabs(int64_t{following_error_value_}) > int64_t{parameters_.following_error_window};
+  if (!outside) {
+    following_error_since_.reset();
+    following_error_ = false;
+    return;
+  }
+  if (!following_error_since_) following_error_since_ = now;
+  const Tick timeout = Tick{parameters_.following_error_timeout_ms} * motion::kClockHz / 1000;
+  if (!following_error_ && now - *following_error_since_ >= timeout) {
+    following_error_ = true;
+    carry_out(machine_.fault(kFollowingErrorCode), now);
+  }
+}
+
+}  // namespace stepnode::cia402
