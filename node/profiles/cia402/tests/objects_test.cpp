@@ -181,7 +181,8 @@ TEST_F(Cia402Objects, OptionCodesTakeTheStandardsValuesOnly) {
     EXPECT_EQ(write<int16_t>(r.index, 0, static_cast<int16_t>(r.high + 1)), SdoAbort::ValueTooHigh);
     EXPECT_EQ(write<int16_t>(r.index, 0, static_cast<int16_t>(r.low - 1)), SdoAbort::ValueTooLow);
   }
-  EXPECT_EQ(write<int16_t>(0x6086, 0, 3), SdoAbort::None);  // jerk-limited ramp
+  EXPECT_EQ(write<int16_t>(0x6086, 0, 0), SdoAbort::None);          // linear ramp
+  EXPECT_EQ(write<int16_t>(0x6086, 0, 3), SdoAbort::InvalidValue);  // jerk-limited: not yet
   EXPECT_EQ(write<int16_t>(0x6086, 0, 1), SdoAbort::InvalidValue);
   EXPECT_EQ(write<int16_t>(0x60C0, 0, 1), SdoAbort::InvalidValue);
   for (int8_t method : {0, 1, 14, 17, 30, 33, 35, 37})
