@@ -8,8 +8,6 @@
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick kOriginDwellTicks = kClockHz / 20;  // 50 ms (SPM30 4 FIND HOME step 5)
-
 int64_t floor_div(int64_t a, int64_t b) {
   int64_t q = a / b;
   return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
@@ -196,119 +194,98 @@ void Axis::select(unsigned index, Tick now) {
 void Axis::execute(uint16_t bit, Tick now) {
   switch (bit) {
     case command::kClearErrors: errors_ = 0; break;
-    case command::kImmediateStop:
-      // Whichever front end's job runs (README: the front ends' arbitration).
-      if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
-      core_.abort(this, now);
-      waiting_for_limit_release_ = false;
-      job_ = Job::None;
-      break;
-    case command::kDecelStop:
-      if (waiting_for_limit_release_) {
-        waiting_for_limit_release_ = false;
-        core_.end_wait(*this);  // the job ends (motion_ended) at the next advance
-        resumable_ = true;  // nothing moved yet: the whole move can be resumed
-      } else if (core_.moving()) {
-        core_.stop(now);
-        // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
-        // it must not go on to steps 4-7 when the origin passes during the ramp down.
-        if (job_ == Job::Home) job_ = Job::None;
-      }
-      break;
-    case command::kSetPosition:
-      // SPM30 3.4 / 3.4.1: DESTINATION POSITION is -8,388,608..+8,388,607; outside it the
-      // command is not possible (Illegal Move) rather than a position the module cannot hold.
-      if (words_.destination < kPositionMin || words_.destination > kPositionMax)
-        return latch(status::kIllegalMove, now);
-      core_.set_position(words_.destination);
-      // SPM30 4 SET CURRENT POSITION: "(and into ENCODER POSITION if axis 1 is selected)".
-      if (core_.selected() == 0) encoder_offset_ += words_.destination - encoder_position();
-      position_valid_ = true;
-      break;
+    case command::kImmediateStop: immediate_stop(now); break;
+    case command::kDecelStop: decelerate_and_stop(now); break;
+    case command::kSetPosition: set_current_position(now); break;
     case command::kSelectAxis1: select(0, now); break;
     case command::kSelectAxis2: select(1, now); break;
     case command::kSelectAxis3: select(2, now); break;
-    case command::kFindHomeUp:
-    case command::kFindHomeDown: {
-      // SPM30 3.4.1: the destination is loaded into MOTOR POSITION at the end; one the module
-      // cannot hold makes the command impossible (Illegal Move), checked before any motion.
-      if (words_.destination < kPositionMin || words_.destination > kPositionMax)
-        return latch(status::kIllegalMove, now);
-      auto ramp = ramp_from_words(now);
-      if (!ramp) return;
-      position_valid_ = false;  // FIND HOME step 1
-      job_ = Job::Home;
-      home_stage_ = HomeStage::Seek;
-      move_ramp_ = *ramp;
-      origin_inactive_since_.reset();
-      int direction = bit == command::kFindHomeUp ? +1 : -1;
-      if (core_.estop_active()) return latch(status::kEmergencyStop, now);
-      // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
-      // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
-      // the limit is already reached and the search goes on from step 4.
-      if (direction > 0 ? motor().upper_limit() : motor().lower_limit()) {
-        if (!config_.limit_qualified_home)
-          return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
-        job_direction_ = direction;
-        core_.claim(*this, now);
-        core_.set_dir_output(direction > 0);
-        home_event(now, /*at_limit=*/true);
-        break;
-      }
-      start_motion(*ramp, direction, std::nullopt, now);
-      break;
-    }
-    case command::kJogUp:
-    case command::kJogDown: {
-      auto ramp = ramp_from_words(now);
-      if (!ramp) return;
-      int direction = bit == command::kJogUp ? +1 : -1;
-      if (core_.estop_active()) return latch(status::kEmergencyStop, now);
-      if (direction > 0 ? motor().upper_limit() : motor().lower_limit())
-        return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
-      job_ = Job::Jog;
-      move_ramp_ = *ramp;
-      start_motion(*ramp, direction, std::nullopt, now);
-      break;
-    }
+    case command::kFindHomeUp: find_home(+1, now); break;
+    case command::kFindHomeDown: find_home(-1, now); break;
+    case command::kJogUp: jog(+1, now); break;
+    case command::kJogDown: jog(-1, now); break;
     case command::kMoveRelative:
     case command::kMoveAbsolute:
-    case command::kMoveIndexed: {
-      if (words_.destination < kPositionMin || words_.destination > kPositionMax)
-        return latch(status::kIllegalMove, now);
-      // MOVE ABSOLUTE needs a valid position (SPM30 3.3.1).
-      if (bit == command::kMoveAbsolute && !position_valid_) return latch(status::kIllegalMove, now);
-      auto ramp = ramp_from_words(now);
-      if (!ramp) return;
-      if (bit == command::kMoveIndexed) {
-        // SPM30 3.4 / STP100 4.2.3: the words may be changed for the next command as soon as
-        // this one started, so the index words (and the alternate deceleration, %AQ10) are
-        // taken now, not when the index comes.
-        auto index_ramp = ramp_from_words(now, /*index_decel=*/true);
-        if (!index_ramp) return;
-        index_ramp_ = *index_ramp;
-        index_destination_ = words_.index_destination;
-        index_window_open_ = words_.index_window_open;
-        index_window_close_ = words_.index_window_close;
-      }
-      int64_t distance = bit == command::kMoveAbsolute
-                             ? int64_t{words_.destination} - core_.position()
-                             : int64_t{words_.destination};
-      move_repeatable_ = bit != command::kMoveAbsolute;  // STP100 5.3.6
-      repeat_distance_ = distance;
-      start_move(distance, *ramp, now, bit == command::kMoveIndexed);
-      break;
-    }
-    case command::kResumeMove: {
-      if (!resumable_) return latch(status::kIllegalMove, now);
-      resumable_ = false;
-      // From where it left off, toward the original target, with the original ramp.
-      start_move((move_target_steps_ - move_done_steps_) * job_direction_, move_ramp_, now,
-                 move_indexed_, /*resume=*/true);
-      break;
-    }
+    case command::kMoveIndexed: move(bit, now); break;
+    case command::kResumeMove: resume_move(now); break;
     default: break;
   }
+}
+
+void Axis::immediate_stop(Tick now) {
+  // Whichever front end's job runs (README: the front ends' arbitration).
+  if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
+  core_.abort(this, now);
+  waiting_for_limit_release_ = false;
+  job_ = Job::None;
+}
+
+void Axis::decelerate_and_stop(Tick now) {
+  if (waiting_for_limit_release_) {
+    waiting_for_limit_release_ = false;
+    core_.end_wait(*this);  // the job ends (motion_ended) at the next advance
+    resumable_ = true;      // nothing moved yet: the whole move can be resumed
+  } else if (core_.moving()) {
+    core_.stop(now);
+    // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
+    // it must not go on to steps 4-7 when the origin passes during the ramp down.
+    if (job_ == Job::Home) job_ = Job::None;
+  }
+}
+
+void Axis::set_current_position(Tick now) {
+  // SPM30 3.4 / 3.4.1: DESTINATION POSITION is -8,388,608..+8,388,607; outside it the
+  // command is not possible (Illegal Move) rather than a position the module cannot hold.
+  if (words_.destination < kPositionMin || words_.destination > kPositionMax)
+    return latch(status::kIllegalMove, now);
+  core_.set_position(words_.destination);
+  // SPM30 4 SET CURRENT POSITION: "(and into ENCODER POSITION if axis 1 is selected)".
+  if (core_.selected() == 0) encoder_offset_ += words_.destination - encoder_position();
+  position_valid_ = true;
+}
+
+void Axis::jog(int direction, Tick now) {
+  auto ramp = ramp_from_words(now);
+  if (!ramp) return;
+  if (core_.estop_active()) return latch(status::kEmergencyStop, now);
+  if (direction > 0 ? motor().upper_limit() : motor().lower_limit())
+    return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  job_ = Job::Jog;
+  move_ramp_ = *ramp;
+  start_motion(*ramp, direction, std::nullopt, now);
+}
+
+void Axis::move(uint16_t bit, Tick now) {
+  if (words_.destination < kPositionMin || words_.destination > kPositionMax)
+    return latch(status::kIllegalMove, now);
+  // MOVE ABSOLUTE needs a valid position (SPM30 3.3.1).
+  if (bit == command::kMoveAbsolute && !position_valid_) return latch(status::kIllegalMove, now);
+  auto ramp = ramp_from_words(now);
+  if (!ramp) return;
+  if (bit == command::kMoveIndexed) {
+    // SPM30 3.4 / STP100 4.2.3: the words may be changed for the next command as soon as
+    // this one started, so the index words (and the alternate deceleration, %AQ10) are
+    // taken now, not when the index comes.
+    auto index_ramp = ramp_from_words(now, /*index_decel=*/true);
+    if (!index_ramp) return;
+    index_ramp_ = *index_ramp;
+    index_destination_ = words_.index_destination;
+    index_window_open_ = words_.index_window_open;
+    index_window_close_ = words_.index_window_close;
+  }
+  int64_t distance = bit == command::kMoveAbsolute ? int64_t{words_.destination} - core_.position()
+                                                   : int64_t{words_.destination};
+  move_repeatable_ = bit != command::kMoveAbsolute;  // STP100 5.3.6
+  repeat_distance_ = distance;
+  start_move(distance, *ramp, now, bit == command::kMoveIndexed);
+}
+
+void Axis::resume_move(Tick now) {
+  if (!resumable_) return latch(status::kIllegalMove, now);
+  resumable_ = false;
+  // From where it left off, toward the original target, with the original ramp.
+  start_move((move_target_steps_ - move_done_steps_) * job_direction_, move_ramp_, now, move_indexed_,
+             /*resume=*/true);
 }
 
 void Axis::write_commands(uint16_t bits, Tick now) {
@@ -401,52 +378,6 @@ void Axis::aborted(Tick when) {
   waiting_for_limit_release_ = false;
 }
 
-void Axis::home_event(Tick now, bool at_limit) {
-  bool origin = origin_active();
-  switch (home_stage_) {
-    case HomeStage::Seek:
-      // Step 3: stop at once on the origin, or (limit-switch-qualified, STP100 3.2.3) on
-      // the end limit of the direction of travel.
-      if (config_.limit_qualified_home ? !at_limit : !origin) return;
-      core_.halt_motion(now);
-      break;
-    case HomeStage::BackToOrigin:
-      if (origin) {
-        home_stage_ = HomeStage::Clear;  // step 5: keep going till inactive for 50 ms
-        origin_inactive_since_.reset();
-      }
-      return;
-    case HomeStage::Clear:
-      if (origin) origin_inactive_since_.reset();
-      else if (!origin_inactive_since_) origin_inactive_since_ = now;
-      return;
-    case HomeStage::Approach:
-      if (!origin) return;
-      core_.halt_motion(now);  // step 7: precisely at home
-      break;
-  }
-  // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach.
-  if (home_stage_ == HomeStage::Seek && config_.home_method == AxisConfig::HomeMethod::Normal) {
-    // Step 4: back at base velocity till the origin is active again. Whether it still is
-    // active is decided as each step of that run is due (advance_to), not here at the stop:
-    // a load that coasted past the origin ("just in case we shot right past home", SPM30 4
-    // FIND HOME step 4) must come back to it; one still on it goes straight on to step 5.
-    home_stage_ = HomeStage::BackToOrigin;
-    origin_inactive_since_.reset();
-    start_base_run(-job_direction_, now);
-    job_direction_ = core_.generator().direction();
-    return;
-  }
-  // Step 8: the destination becomes motor position, and encoder position "if axis 1 is
-  // selected" (SPM30 4 FIND HOME step 7).
-  core_.set_position(words_.destination);
-  if (core_.selected() == 0) encoder_offset_ += words_.destination - encoder_position();
-  position_valid_ = true;
-  job_ = Job::None;
-  core_.release(*this);
-  notify(AxisEvent::MoveDone);
-}
-
 void Axis::after_step(const Step& step) {
   Tick t = step.time;
   if (job_ == Job::Move) ++move_done_steps_;
@@ -514,30 +445,6 @@ void Axis::poll(Tick now) {
   if (still) return;
   waiting_for_limit_release_ = false;
   start_motion(move_ramp_, job_direction_, move_target_steps_ - move_done_steps_, now);
-}
-
-std::optional<Tick> Axis::deadline() const {
-  // The 50 ms dwell of FIND HOME step 5 ends between steps at base velocity.
-  if (job_ == Job::Home && home_stage_ == HomeStage::Clear && origin_inactive_since_)
-    return *origin_inactive_since_ + kOriginDwellTicks;
-  return std::nullopt;
-}
-
-void Axis::at_deadline(Tick when) {
-  core_.halt_motion(when);
-  home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin
-  origin_inactive_since_.reset();
-  start_base_run(-job_direction_, when);
-  job_direction_ = core_.generator().direction();
-}
-
-void Axis::before_step() {
-  // FIND HOME step 4 ends when the origin is active again; that includes before the first
-  // step back (still on it after the stop) and after the load was moved by hand.
-  if (job_ == Job::Home && home_stage_ == HomeStage::BackToOrigin && origin_active()) {
-    home_stage_ = HomeStage::Clear;
-    origin_inactive_since_.reset();
-  }
 }
 
 void Axis::advanced(Tick now) {

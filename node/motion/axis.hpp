@@ -104,6 +104,14 @@ class Axis final : public FrontEnd, public AxisListener {
   const MotorPort& motor() const { return core_.motor(); }
   bool origin_active() const;
   void execute(uint16_t command_bit, Tick now);
+  // The commands (SPM30 section 4), one each; FIND HOME is node/motion/axis_homing.cpp.
+  void immediate_stop(Tick now);
+  void decelerate_and_stop(Tick now);
+  void set_current_position(Tick now);
+  void find_home(int direction, Tick now);
+  void jog(int direction, Tick now);
+  void move(uint16_t command_bit, Tick now);
+  void resume_move(Tick now);
   void latch(uint16_t error_bits, Tick now);
   void latched(uint16_t error_bits, bool was_moving);
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);
