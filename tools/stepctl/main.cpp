@@ -14,6 +14,7 @@
 #include "tools/stepctl/object_catalog.hpp"
 #include "tools/stepctl/watch.hpp"
 #include "tools/stepctl/axis_commands.hpp"
+#include "tools/stepctl/drive_command.hpp"
 #include "tools/stepctl/hp_command.hpp"
 #include "tools/stepctl/hp_words.hpp"
 
@@ -215,6 +216,10 @@ int main(int argc, char** argv) {
   hp->add_option("--axis", hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
   hp->add_option("--wait", hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
 
+  // CiA 402: stepctl drive status|enable|disable|quick-stop|fault-reset|pp|pv|home --node N --axis A
+  DriveArgs drive_args;
+  auto* drive = add_drive_command(app, drive_args);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -236,6 +241,13 @@ int main(int argc, char** argv) {
     if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
     if (*dump) return cmd_dump(bus, catalog, node);
     if (*hp) return run_hp_command(bus, node, static_cast<unsigned>(hp_channel), hp_words, hp_wait_s);
+    if (*drive) {
+      try {
+        return run_drive_command(bus, catalog, drive_args);
+      } catch (const std::runtime_error& e) {  // the node refused or the drive did not follow
+        throw Failure(e.what());
+      }
+    }
     for (const char* verb : {"clear", "home", "move", "jog", "stop", "estop", "status"}) {
       if (!*app.get_subcommand(verb)) continue;
       std::vector<std::string> words{verb};

@@ -329,6 +329,11 @@ void Drive::advanced(Tick now) {
   const bool interpolating = mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
   demand_ = interpolating && core_.owned_by(*this) ? static_cast<int32_t>(cyclic_demand(now)) : core_.position();
   machine_.set_fault_condition_active(core_.estop_active() || connection_lost_);
+  // The e-stop input is a fault whether or not the axis moves (the core tells of it only
+  // when it ends a job).
+  const State st = machine_.state();
+  if (core_.estop_active() && st != State::Fault && st != State::FaultReactionActive)
+    carry_out(machine_.fault(kExternalError), now);
   // Target reached (PP): the trajectory is at the target and has been inside the position
   // window (6067h) for the window time (6068h); halted: the velocity is 0.
   const Tick window = static_cast<Tick>(parameters_.position_window_time_ms) * motion::kClockHz / 1000;
