@@ -117,22 +117,33 @@ void Drive::controlword(uint16_t cw, Tick now) {
 
 void Drive::set_mode(Mode mode, Tick now) {
   core_.advance_to(now);
+  const bool changed = mode != mode_;
   mode_ = mode;
-  // The mode changes when the drive's own motion has ended (a running PP move is not
-  // turned into a velocity; CiA 402-2 leaves the moment to the drive).
+  // The mode changes once the drive's own motion has ended: a running motion of the old
+  // mode ramps down (6084h) first (CiA 402-2 leaves the moment to the drive); 6061h shows
+  // the new mode from then on.
   if (!core_.owned_by(*this)) {
     mode_display_ = mode_;
     active_.reset();
     next_.reset();
+  } else if (changed && mode_ != mode_display_) {
+    active_.reset();
+    next_.reset();
+    restart_after_stop_ = false;
+    velocity_after_stop_.reset();
+    csv_running_ = false;
+    if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
+    core_.stop(now);
   }
-  if (mode_display_ == Mode::ProfileVelocity && machine_.operation_enabled() && !halted_)
+  if (mode_display_ == Mode::ProfileVelocity && mode_ == mode_display_ && machine_.operation_enabled() && !halted_)
     velocity_to(target_velocity_, now);
   notify();
 }
 
 void Drive::set_target_velocity(int32_t steps_per_s, Tick now) {
   target_velocity_ = steps_per_s;
-  if (mode_display_ != Mode::ProfileVelocity || !machine_.operation_enabled() || halted_) return;
+  if (mode_display_ != Mode::ProfileVelocity || mode_ != mode_display_ || !machine_.operation_enabled() || halted_)
+    return;
   core_.advance_to(now);
   velocity_to(steps_per_s, now);
   notify();
@@ -287,7 +298,10 @@ void Drive::motion_ended(Tick when) {
   }
   if (active_) in_window_since_ = when;
   active_.reset();
+  if (mode_display_ == mode_) return;
   mode_display_ = mode_;  // a mode change waited for the motion's end
+  if (mode_display_ == Mode::ProfileVelocity && machine_.operation_enabled() && !halted_)
+    velocity_to(target_velocity_, when);
 }
 
 void Drive::aborted(Tick when) {

@@ -300,6 +300,25 @@ TEST_F(DriveTest, ProfileVelocityFollowsTheTargetAndReverses) {
   EXPECT_EQ(motor.position(), at);
 }
 
+TEST_F(DriveTest, AModeChangeWhileMovingRampsDownThenShowsTheNewMode) {
+  drive.set_mode(Mode::ProfileVelocity, now);
+  enable();
+  set_profile(1000, 10'000, 10'000);
+  drive.set_target_velocity(1000, now);
+  run(ms(300));
+  drive.set_mode(Mode::ProfilePosition, now);
+  EXPECT_EQ(drive.mode_display(), Mode::ProfileVelocity);  // still moving
+  run(ms(200));
+  EXPECT_EQ(drive.velocity_actual(), 0);
+  EXPECT_EQ(drive.mode_display(), Mode::ProfilePosition);
+  const int64_t at = motor.position();
+  drive.set_target_position(static_cast<int32_t>(at + 100));
+  cw(0x1F);
+  cw(0x0F);
+  run(ms(500));
+  EXPECT_EQ(motor.position(), at + 100);
+}
+
 TEST_F(DriveTest, AnotherFrontEndsJobKeepsTheSetPointUnacknowledged) {
   struct Other final : motion::FrontEnd {
     void after_step(const motion::Step&) override {}
