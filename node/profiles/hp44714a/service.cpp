@@ -60,18 +60,28 @@ SdoAbort HpService::result(unsigned a, hp::Error e) {
   return SdoAbort::DeviceState;
 }
 
-void HpService::install_hooks(unsigned a) {
-  hp::Channel& ch = *channels_[a];
-  od::Dictionary& od = dictionary_;
+void HpService::hook(unsigned a, uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
   // A command is a write: it acts once the value is stored (for an RPDO, once the whole
   // PDO is), on the stored value; a refusal puts the previous value back and is the abort.
-  auto hook = [&](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
-    od::Entry& entry = od.at(index(a, offset), sub);
-    od::react(entry, [this, a, f, &entry] {
-      SdoAbort r = f(entry.value);
-      publish(a);
-      return r;
-    });
+  od::Entry& entry = dictionary_.at(index(a, offset), sub);
+  od::react(entry, [this, a, f = std::move(f), &entry] {
+    SdoAbort r = f(entry.value);
+    publish(a);
+    return r;
+  });
+}
+
+void HpService::install_hooks(unsigned a) {
+  install_command_hooks(a);
+  install_output_hooks(a);
+  install_counter_hooks(a);
+}
+
+// PROFILE, PSCALE, MOVE, SUSTAIN, TRIG, DELAY.
+void HpService::install_command_hooks(unsigned a) {
+  hp::Channel& ch = *channels_[a];
+  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+    this->hook(a, offset, sub, std::move(f));
   };
   // PROFILE: subs 1-5 are staged; writing 1 to sub 6 gives the PROFILE command.
   hook(kProfile, hp44714a::profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
@@ -104,11 +114,21 @@ void HpService::install_hooks(unsigned a) {
   hook(kTrig, 0, [this, a, &ch](std::span<const uint8_t> d) {
     return result(a, ch.trig(static_cast<hp::TrigMode>(u8(d)), now()));
   });
-  od.at(index(a, kTrig), 0).on_read = [&ch](od::Bytes& v) { v = od::encode<uint8_t>(static_cast<uint8_t>(ch.trig_mode())); };
+  dictionary_.at(index(a, kTrig), 0).on_read = [&ch](od::Bytes& v) {
+    v = od::encode<uint8_t>(static_cast<uint8_t>(ch.trig_mode()));
+  };
   hook(kDelay, 0, [&ch](std::span<const uint8_t> d) {
     ch.delay(od::decode<uint16_t>(d));
     return SdoAbort::None;
   });
+}
+
+// STANDBY, PULSE, HARDLIM, HALT.
+void HpService::install_output_hooks(unsigned a) {
+  hp::Channel& ch = *channels_[a];
+  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+    this->hook(a, offset, sub, std::move(f));
+  };
   uint16_t out = index(a, kOutput);
   auto standby = [this, a, &ch, out](uint8_t mode, uint8_t sense) {
     return result(a, ch.standby(static_cast<hp::StandbyMode>(mode), sense != 0, now()));
@@ -141,6 +161,15 @@ void HpService::install_hooks(unsigned a) {
     if (u8(d)) ch.halt_sgl(now());
     return SdoAbort::None;
   });
+}
+
+// POS, the quadrature counter, interrupts, and the simulated terminal inputs.
+void HpService::install_counter_hooks(unsigned a) {
+  hp::Channel& ch = *channels_[a];
+  od::Dictionary& od = dictionary_;
+  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+    this->hook(a, offset, sub, std::move(f));
+  };
   hook(kPosition, 0, [this, a, &ch](std::span<const uint8_t> d) {
     return std::isfinite(real(d)) ? result(a, ch.pos(real(d))) : SdoAbort::InvalidValue;
   });

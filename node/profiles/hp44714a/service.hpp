@@ -6,6 +6,8 @@
 // (TPDO 4n+4 carries them); a SYNC is TRIG SYS; channel 0's trigger is TRIG CHAN0's.
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <memory>
 #include <vector>
 
@@ -35,6 +37,11 @@ class HpService final : public Profile {
 
  private:
   void install_hooks(unsigned a);
+  void install_command_hooks(unsigned a);
+  void install_output_hooks(unsigned a);
+  void install_counter_hooks(unsigned a);
+  // A reaction on axis a's object `offset`, sub `sub`, publishing the channel after it.
+  void hook(unsigned a, uint16_t offset, uint8_t sub, std::function<od::SdoAbort(std::span<const uint8_t>)> f);
   void apply_stored(unsigned a, motion::Tick now);
   void publish(unsigned a);
   od::SdoAbort result(unsigned a, motion::hp::Error e);
