@@ -56,6 +56,15 @@ PROFILE_DECELERATION = 0x6084
 QUICK_STOP_DECELERATION = 0x6085
 TARGET_VELOCITY = 0x60FF
 SUPPORTED_DRIVE_MODES = 0x6502
+FOLLOWING_ERROR_WINDOW = 0x6065
+FOLLOWING_ERROR_TIMEOUT = 0x6066
+HOME_OFFSET = 0x607C
+MAX_PROFILE_VELOCITY = 0x607F
+HOMING_METHOD = 0x6098
+HOMING_SPEEDS = 0x6099  # sub 1 speed during search for switch, sub 2 speed during search for zero
+HOMING_ACCELERATION = 0x609A
+INTERPOLATION_TIME_PERIOD = 0x60C2  # sub 1 value, sub 2 index: the period is value * 10^index s
+FOLLOWING_ERROR_ACTUAL = 0x60F4
 SINGLE_DEVICE_TYPE = 0x67FF
 ABORT_CONNECTION_OPTION = 0x6007
 
@@ -112,6 +121,12 @@ SW_INTERNAL_LIMIT = 1 << 11
 SW_SET_POINT_ACK = 1 << 12  # pp: set-point acknowledge
 SW_SPEED_ZERO = 1 << 12  # pv: speed (1 = speed is equal 0)
 SW_FOLLOWING_ERROR = 1 << 13  # pp: following error; pv: max slippage error
+SW_HOMING_ATTAINED = 1 << 12  # hm: homing attained
+SW_HOMING_ERROR = 1 << 13  # hm: homing error
+SW_DRIVE_FOLLOWS = 1 << 12  # csp, csv: drive follows the command value
+
+# Controlword bit 4 in homing mode: homing operation start (0 -> 1 edge)
+CW_HOMING_START = 1 << 4
 
 
 @dataclass(frozen=True)
