@@ -46,6 +46,60 @@ struct AxisPositionSample {
   uint64_t publish_time_ns = 0;  // CLOCK_REALTIME when the bridge published
 };
 
+// The CiA 402 power drive system state (IEC 61800-7-201 / CiA 402-2 "device control"), as
+// the statusword's state coding gives it; Unknown: no statusword seen yet, or a bit pattern
+// the standard's table does not define.
+enum class DriveState : uint8_t {
+  Unknown = 0,
+  NotReadyToSwitchOn,
+  SwitchOnDisabled,
+  ReadyToSwitchOn,
+  SwitchedOn,
+  OperationEnabled,
+  QuickStopActive,
+  FaultReactionActive,
+  Fault,
+};
+
+// 6041h state coding (bits 6, 5, 3..0; "x" is any value):
+//   x0xx 0000 Not ready to switch on    x1xx 0000 Switch on disabled
+//   x01x 0001 Ready to switch on        x01x 0011 Switched on
+//   x01x 0111 Operation enabled         x00x 0111 Quick stop active
+//   x0xx 1111 Fault reaction active     x0xx 1000 Fault
+constexpr DriveState drive_state_of(uint16_t statusword) {
+  switch (statusword & 0x4F) {
+    case 0x00: return DriveState::NotReadyToSwitchOn;
+    case 0x40: return DriveState::SwitchOnDisabled;
+    case 0x0F: return DriveState::FaultReactionActive;
+    case 0x08: return DriveState::Fault;
+    default: break;
+  }
+  switch (statusword & 0x6F) {
+    case 0x21: return DriveState::ReadyToSwitchOn;
+    case 0x23: return DriveState::SwitchedOn;
+    case 0x27: return DriveState::OperationEnabled;
+    case 0x07: return DriveState::QuickStopActive;
+    default: return DriveState::Unknown;
+  }
+}
+
+// One CiA 402 axis (node, axis 1-based: its objects at index + 0x800 * (axis - 1)); the
+// values are the last the TPDOs (or discovery's SDO reads) carried.
+struct DriveStatusSample {
+  uint8_t node = 0;
+  uint8_t axis = 0;
+  bool statusword_known = false;  // false: state() is Unknown
+  uint16_t statusword = 0;        // 6041h
+  int8_t mode_display = 0;        // 6061h (0: no mode)
+  int32_t position_actual = 0;    // 6064h, position units
+  int32_t velocity_actual = 0;    // 606Ch, velocity units
+  int32_t following_error = 0;    // 60F4h, position units
+  uint16_t error_code = 0;        // 603Fh
+  uint64_t can_time_ns = 0;       // kernel receive timestamp of the TPDO (or of the SDO answer)
+  uint64_t publish_time_ns = 0;   // CLOCK_REALTIME when the bridge published
+  DriveState state() const { return statusword_known ? drive_state_of(statusword) : DriveState::Unknown; }
+};
+
 struct BusCounters {
   uint64_t frames = 0;        // every frame received
   uint64_t bad_frames = 0;    // malformed: wrong length (TPDO shorter than its mapping, EMCY,
@@ -73,7 +127,8 @@ struct NodeHealthSample {
   bool is_stepnode = false;     // identity says stepnode (0x1018 product code 0x53544550)
   std::string device_name;      // 0x1008 (empty until read or when unreadable)
   uint32_t vendor_id = 0, product_code = 0, revision = 0, serial = 0;  // 0x1018
-  uint8_t axes = 0;             // axis blocks found (0x2n01 present)
+  uint8_t axes = 0;             // the device's axes: Horner blocks (0x2n01) or CiA 402 axes
+                                // (67FFh + 0x800 * a), whichever are more
   uint32_t heartbeat_age_ms = 0;  // since the last heartbeat
   uint16_t last_emcy_code = 0;
   uint8_t error_register = 0;   // from the last EMCY
@@ -92,7 +147,9 @@ class SampleSink {
   virtual void axis_position(const AxisPositionSample& sample) = 0;
   virtual void node_health(const NodeHealthSample& sample) = 0;
   virtual void emergency(const EmergencySample& sample) = 0;
-  // The node is lost (or gone): its axis instances are disposed.
+  virtual void drive_status(const DriveStatusSample& sample) = 0;
+  // The node is lost (or gone): its axis instances (AxisStatus, AxisPosition and
+  // DriveStatus) are disposed.
   virtual void dispose_axes(uint8_t node, uint8_t axes) = 0;
 };
 

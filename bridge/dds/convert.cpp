@@ -38,6 +38,66 @@ std::string_view state_text(::stepnode::NodeState state) {
   return "UNKNOWN";
 }
 
+::stepnode::DriveState to_idl(DriveState state) {
+  switch (state) {
+    case DriveState::Unknown: return ::stepnode::DRIVE_UNKNOWN;
+    case DriveState::NotReadyToSwitchOn: return ::stepnode::DRIVE_NOT_READY_TO_SWITCH_ON;
+    case DriveState::SwitchOnDisabled: return ::stepnode::DRIVE_SWITCH_ON_DISABLED;
+    case DriveState::ReadyToSwitchOn: return ::stepnode::DRIVE_READY_TO_SWITCH_ON;
+    case DriveState::SwitchedOn: return ::stepnode::DRIVE_SWITCHED_ON;
+    case DriveState::OperationEnabled: return ::stepnode::DRIVE_OPERATION_ENABLED;
+    case DriveState::QuickStopActive: return ::stepnode::DRIVE_QUICK_STOP_ACTIVE;
+    case DriveState::FaultReactionActive: return ::stepnode::DRIVE_FAULT_REACTION_ACTIVE;
+    case DriveState::Fault: return ::stepnode::DRIVE_FAULT;
+  }
+  return ::stepnode::DRIVE_UNKNOWN;
+}
+
+std::string_view drive_state_text(::stepnode::DriveState state) {
+  switch (state) {  // IEC 61800-7-201 / CiA 402-2 state names
+    case ::stepnode::DRIVE_UNKNOWN: return "unknown";
+    case ::stepnode::DRIVE_NOT_READY_TO_SWITCH_ON: return "Not ready to switch on";
+    case ::stepnode::DRIVE_SWITCH_ON_DISABLED: return "Switch on disabled";
+    case ::stepnode::DRIVE_READY_TO_SWITCH_ON: return "Ready to switch on";
+    case ::stepnode::DRIVE_SWITCHED_ON: return "Switched on";
+    case ::stepnode::DRIVE_OPERATION_ENABLED: return "Operation enabled";
+    case ::stepnode::DRIVE_QUICK_STOP_ACTIVE: return "Quick stop active";
+    case ::stepnode::DRIVE_FAULT_REACTION_ACTIVE: return "Fault reaction active";
+    case ::stepnode::DRIVE_FAULT: return "Fault";
+  }
+  return "unknown";
+}
+
+::stepnode::DriveStatus to_idl(const DriveStatusSample& s) {
+  ::stepnode::DriveStatus out;
+  auto bit = [&](uint16_t mask) { return (s.statusword & mask) != 0; };
+  out.node(s.node);
+  out.axis(s.axis);
+  out.statusword(s.statusword);
+  out.state(to_idl(s.state()));
+  out.mode_display(s.mode_display);
+  out.position_actual(s.position_actual);
+  out.velocity_actual(s.velocity_actual);
+  out.following_error(s.following_error);
+  out.error_code(s.error_code);
+  out.ready_to_switch_on(bit(drive_bit::kReadyToSwitchOn));
+  out.switched_on(bit(drive_bit::kSwitchedOn));
+  out.operation_enabled(bit(drive_bit::kOperationEnabled));
+  out.fault(bit(drive_bit::kFault));
+  out.voltage_enabled(bit(drive_bit::kVoltageEnabled));
+  out.quick_stop(bit(drive_bit::kQuickStop));
+  out.switch_on_disabled(bit(drive_bit::kSwitchOnDisabled));
+  out.warning(bit(drive_bit::kWarning));
+  out.remote(bit(drive_bit::kRemote));
+  out.target_reached(bit(drive_bit::kTargetReached));
+  out.internal_limit_active(bit(drive_bit::kInternalLimitActive));
+  out.bit12(bit(kDriveBit12));
+  out.bit13(bit(kDriveBit13));
+  out.can_time_ns(s.can_time_ns);
+  out.publish_time_ns(s.publish_time_ns);
+  return out;
+}
+
 ::stepnode::AxisStatus to_idl(const AxisStatusSample& s) {
   ::stepnode::AxisStatus out;
   auto bit = [&](uint16_t mask) { return (s.status_bits & mask) != 0; };

@@ -10,6 +10,7 @@ std::string_view idl_name(TopicKind kind) {
     case TopicKind::AxisPosition: return "AxisPosition";
     case TopicKind::NodeHealth: return "NodeHealth";
     case TopicKind::Emergency: return "Emergency";
+    case TopicKind::DriveStatus: return "DriveStatus";
   }
   return "?";
 }
@@ -20,6 +21,7 @@ std::string_view snake_name(TopicKind kind) {
     case TopicKind::AxisPosition: return "axis_position";
     case TopicKind::NodeHealth: return "node_health";
     case TopicKind::Emergency: return "emergency";
+    case TopicKind::DriveStatus: return "drive_status";
   }
   return "?";
 }

@@ -1,6 +1,6 @@
-// Topic and type names of the bridge's four topics, plain (default) or ROS 2.
+// Topic and type names of the bridge's five topics, plain (default) or ROS 2.
 //
-// Plain: topics "AxisStatus", "AxisPosition", "NodeHealth", "Emergency" with the IDL's
+// Plain: topics "AxisStatus", "AxisPosition", "NodeHealth", "Emergency", "DriveStatus" with the IDL's
 // own type names "stepnode::AxisStatus" ... (what fastddsgen and Cyclone's idlc generate).
 //
 // ROS 2 (rmw_fastrtps conventions): topic "rt/<prefix>/axis_status" ... and type
@@ -11,15 +11,18 @@
 // mode the topics are unkeyed: see types.hpp.
 #pragma once
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
 
 namespace stepnode::bridge::dds {
 
-enum class TopicKind : uint8_t { AxisStatus, AxisPosition, NodeHealth, Emergency };
-constexpr std::array<TopicKind, 4> kAllTopics{TopicKind::AxisStatus, TopicKind::AxisPosition,
-                                             TopicKind::NodeHealth, TopicKind::Emergency};
+enum class TopicKind : uint8_t { AxisStatus, AxisPosition, NodeHealth, Emergency, DriveStatus };
+constexpr std::array<TopicKind, 5> kAllTopics{TopicKind::AxisStatus, TopicKind::AxisPosition,
+                                             TopicKind::NodeHealth, TopicKind::Emergency,
+                                             TopicKind::DriveStatus};
+constexpr std::size_t kTopicCount = kAllTopics.size();
 
 struct Naming {
   bool ros2 = false;

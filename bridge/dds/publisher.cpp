@@ -49,9 +49,10 @@ DdsPublisher::DdsPublisher(const PublisherOptions& options) : naming_(options.na
     delete_participant(participant_);
     throw;
   }
-  spdlog::info("DDS domain {}: topics {} / {} / {} / {}{}", domain_, topic_name(TopicKind::AxisStatus, naming_),
+  spdlog::info("DDS domain {}: topics {} / {} / {} / {} / {}{}", domain_, topic_name(TopicKind::AxisStatus, naming_),
                topic_name(TopicKind::AxisPosition, naming_), topic_name(TopicKind::NodeHealth, naming_),
-               topic_name(TopicKind::Emergency, naming_), naming_.ros2 ? " (ROS 2 naming, unkeyed)" : "");
+               topic_name(TopicKind::Emergency, naming_), topic_name(TopicKind::DriveStatus, naming_),
+               naming_.ros2 ? " (ROS 2 naming, unkeyed)" : "");
 }
 
 DdsPublisher::~DdsPublisher() { delete_participant(participant_); }
@@ -91,6 +92,13 @@ void DdsPublisher::emergency(const EmergencySample& sample) {
   write(TopicKind::Emergency, &data);
 }
 
+void DdsPublisher::drive_status(const DriveStatusSample& sample) {
+  DriveStatusSample stamped = sample;
+  stamped.publish_time_ns = realtime_ns();
+  ::stepnode::DriveStatus data = to_idl(stamped);
+  if (write(TopicKind::DriveStatus, &data)) drive_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+}
+
 void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
   if (naming_.ros2) return;  // unkeyed: no instances to dispose
   auto dispose = [&](TopicKind kind, std::set<uint16_t>& instances, auto make) {
@@ -115,11 +123,17 @@ void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
     d.axis(axis);
     return d;
   });
+  dispose(TopicKind::DriveStatus, drive_instances_, [&](uint8_t axis) {
+    ::stepnode::DriveStatus d;
+    d.node(node);
+    d.axis(axis);
+    return d;
+  });
   spdlog::debug("DDS: node {} ({} axes) disposed", node, axes);
 }
 
 void DdsPublisher::wait_acknowledged(uint32_t timeout_ms) {
-  // One deadline for all four writers, not one timeout each.
+  // One deadline for all writers, not one timeout each.
   auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   for (auto* w : writers_) {
     if (!w) continue;

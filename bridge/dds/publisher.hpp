@@ -37,7 +37,8 @@ class DdsPublisher final : public SampleSink {
   void axis_position(const AxisPositionSample& sample) override;
   void node_health(const NodeHealthSample& sample) override;
   void emergency(const EmergencySample& sample) override;
-  // Disposes every AxisStatus and AxisPosition instance this bridge wrote for `node`
+  void drive_status(const DriveStatusSample& sample) override;
+  // Disposes every AxisStatus, AxisPosition and DriveStatus instance this bridge wrote for `node`
   // (axes 1..axes, and any others it knows). Unkeyed ROS 2 topics have no instances:
   // nothing to dispose there, NodeHealth says LOST.
   void dispose_axes(uint8_t node, uint8_t axes) override;
@@ -59,10 +60,11 @@ class DdsPublisher final : public SampleSink {
   uint32_t domain_ = 0;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
-  std::array<eprosima::fastdds::dds::Topic*, 4> topics_{};
-  std::array<eprosima::fastdds::dds::DataWriter*, 4> writers_{};
+  std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
+  std::array<eprosima::fastdds::dds::DataWriter*, kTopicCount> writers_{};
   std::set<uint16_t> status_instances_;    // node << 8 | axis, written and not disposed
   std::set<uint16_t> position_instances_;
+  std::set<uint16_t> drive_instances_;
   uint64_t written_ = 0;
   uint64_t write_failures_ = 0;
 };

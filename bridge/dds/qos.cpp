@@ -41,7 +41,7 @@ efd::DataWriterQos builtin_writer_qos(TopicKind kind, bool ros2) {
   // A late joiner of another vendor (Cyclone) may drop the first push of the history when
   // it has not discovered the writer yet; it recovers on the next heartbeat (3 s default).
   qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 500'000'000);
-  if (kind == TopicKind::AxisPosition) {
+  if (kind == TopicKind::AxisPosition || kind == TopicKind::DriveStatus) {
     // One sample per TPDO, up to ~80,000/s. With Fast DDS's default nack suppression of 0,
     // every write restarts a timer that fires at once, so each sample also wakes the
     // event thread (and contends for the writer's mutex): half the publishing CPU per

@@ -5,11 +5,14 @@
 //   AxisPosition  RELIABLE     VOLATILE         KEEP_LAST 1
 //   NodeHealth    RELIABLE     TRANSIENT_LOCAL  KEEP_LAST 1
 //   Emergency     RELIABLE     TRANSIENT_LOCAL  KEEP_LAST 32
+//   DriveStatus   RELIABLE     TRANSIENT_LOCAL  KEEP_LAST 1
 //
 // Heartbeat period 500 ms (Fast DDS: 3 s), so a reader that missed the first push of
 // the history (another vendor's, before it discovered the writer) catches up quickly.
-// AxisPosition (one sample per TPDO) has a nack suppression duration of 1 ms (Fast DDS:
-// 0, which wakes the writer's event thread on every write; see qos.cpp).
+// AxisPosition and DriveStatus (one sample per TPDO) have a nack suppression duration of
+// 1 ms (Fast DDS: 0, which wakes the writer's event thread on every write; see qos.cpp).
+// DriveStatus is TRANSIENT_LOCAL although it comes per TPDO: a late joiner must get each
+// drive's state at once, as it gets each axis's AxisStatus.
 // Writers never block on a slow subscriber: KEEP_LAST replaces the oldest sample instead
 // of waiting, and max_blocking_time is 1 ms for the rare resource-limit case. Data-sharing
 // delivery is OFF (Fast DDS 2.9 lost RELIABLE samples under overload and crashed

@@ -19,6 +19,7 @@ eprosima::fastdds::dds::TypeSupport make_type_support(TopicKind kind, const Nami
     case TopicKind::AxisPosition: return support<::stepnode::AxisPositionPubSubType>(kind, naming);
     case TopicKind::NodeHealth: return support<::stepnode::NodeHealthPubSubType>(kind, naming);
     case TopicKind::Emergency: return support<::stepnode::EmergencyPubSubType>(kind, naming);
+    case TopicKind::DriveStatus: return support<::stepnode::DriveStatusPubSubType>(kind, naming);
   }
   return {};
 }

@@ -14,6 +14,7 @@
 #include "bridge/observer/retry_backoff.hpp"
 #include "bridge/observer/sdo_channel.hpp"
 #include "bridge/observer/tpdo_decoder.hpp"
+#include "node/profiles/cia402/objects.hpp"
 
 namespace stepnode::bridge {
 namespace {
@@ -42,6 +43,11 @@ struct Node {
   NodeHealthSample health;  // counters and last EMCY live here between publications
   uint8_t published_axes = 0;  // axis instances the sink may hold (disposed on loss)
   uint64_t last_health_us = 0;
+  // After discovery: CiA 402 axes (bit per 0-based axis) whose 603Fh is to be read again
+  // (TpdoDecoder::take_stale_error_codes), and the one being read.
+  uint8_t error_code_reads = 0;
+  bool refreshing = false;
+  uint8_t refresh_axis = 0;
 };
 
 bool sdo_allowed(NodeState s) {
@@ -100,6 +106,7 @@ struct BusObserver::Impl {
 
   void begin_discovery(Node& n);
   void read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
+  void refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
   void sdo_failed(Node& n, uint64_t now);
   void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
   void lose(uint8_t id, Node& n, uint64_t now);
@@ -134,7 +141,14 @@ void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector
   if (!f.rtr) {
     switch (m.tpdo.on_frame(of, tpdo_node)) {
       case TpdoDecoder::Result::Decoded:
-        if (Node* n = m.find(tpdo_node)) ++n->health.frames;
+        if (Node* n = m.find(tpdo_node)) {
+          ++n->health.frames;
+          // A CiA 402 fault came or went: its error code is read (unless a TPDO carries it).
+          if (const uint8_t stale = m.tpdo.take_stale_error_codes(tpdo_node)) {
+            n->error_code_reads |= stale;
+            m.pump(*n, now_us, out);
+          }
+        }
         return;
       case TpdoDecoder::Result::TooShort: return m.bad(m.find(tpdo_node));
       case TpdoDecoder::Result::NotATpdo: break;
@@ -176,7 +190,10 @@ void BusObserver::Impl::on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t
     if (!is_new) tpdo.forget(id);
     begin_discovery(n);
   }
-  if (*state == NodeState::Stopped) n.sdo.cancel();  // a stopped node answers no SDO
+  if (*state == NodeState::Stopped) {  // a stopped node answers no SDO
+    n.sdo.cancel();
+    n.refreshing = false;  // (a refresh read is made again once it may)
+  }
   if (is_new || c.state_changed) publish_health(n, now);
   pump(n, now, out);
 }
@@ -204,7 +221,10 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
   }
   if (f.id == od::cob::kSdoTx + id) ++n->health.frames;
   const SdoChannel::FrameEvent ev = n->sdo.on_frame(f, now, out);
-  if (ev.collision) sdo_failed(*n, now);
+  if (ev.collision) {
+    n->refreshing = false;  // the transfer was dropped; a refresh read is made again
+    sdo_failed(*n, now);
+  }
   if (ev.foreign_download && *ev.foreign_download >= kPdoParamsFirst &&
       *ev.foreign_download <= kPdoParamsLast) {
     // A master is remapping a TPDO: stop decoding it now (its next frames may already
@@ -225,6 +245,8 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
 
 void BusObserver::Impl::begin_discovery(Node& n) {
   n.sdo.cancel();
+  n.error_code_reads = 0;  // the snapshot reads them
+  n.refreshing = false;
   n.plan.restart_all();
   n.backoff.reset();
   n.health.discovered = false;
@@ -232,6 +254,7 @@ void BusObserver::Impl::begin_discovery(Node& n) {
 
 void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
                                   std::vector<od::CanFrame>& out) {
+  if (n.refreshing) return refresh_done(id, n, now, can_time_ns, out);
   const bool had_mapping = n.plan.mapping_read(), was_finished = n.plan.finished();
   const ReadOutcome r = n.plan.on_result(n.sdo.result());
   if (r == ReadOutcome::Failed) {
@@ -243,13 +266,13 @@ void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t ca
   // TPDOs are decoded from the moment their mapping is known, before the snapshot of
   // the axes is read: a TPDO during the snapshot is newer than the snapshot.
   if (!had_mapping && n.plan.mapping_read()) {
-    if (info.axes < n.published_axes) {
+    if (info.device_axes() < n.published_axes) {
       // The node came back with fewer axes (reconfigured): the sink can only dispose a
       // node's axes 1..n together, so all go, and the live ones are published again by
       // the snapshot and the TPDOs that follow.
       sink.dispose_axes(id, n.published_axes);
     }
-    n.published_axes = info.axes;
+    n.published_axes = info.device_axes();
     tpdo.install(id, info);
   }
   if (!was_finished && n.plan.finished()) {
@@ -269,15 +292,41 @@ void BusObserver::Impl::sdo_failed(Node& n, uint64_t now) {
   publish_health(n, now);
 }
 
+void BusObserver::Impl::refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
+                                     std::vector<od::CanFrame>& out) {
+  n.refreshing = false;
+  const od::SdoResult& result = n.sdo.result();
+  const ReadOutcome r = classify(result);
+  if (r == ReadOutcome::Failed) {
+    sdo_failed(n, now);  // the axis stays marked: read again after the backoff
+    return;
+  }
+  n.backoff.reset();
+  n.error_code_reads &= static_cast<uint8_t>(~(1u << n.refresh_axis));
+  if (r == ReadOutcome::Value)
+    tpdo.apply_read(id, cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, result.data, can_time_ns);
+  pump(n, now, out);
+}
+
 void BusObserver::Impl::pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
-  if (n.plan.finished() || !sdo_allowed(n.heartbeat.state())) return;
+  if (!sdo_allowed(n.heartbeat.state())) return;
+  const bool refresh = n.plan.finished() && n.error_code_reads != 0 && !n.refreshing;
+  if (n.plan.finished() && !refresh) return;
   if (!n.backoff.ready(now) || !n.sdo.can_start(now)) return;
+  if (refresh) {
+    n.refresh_axis = static_cast<uint8_t>(__builtin_ctz(n.error_code_reads));
+    n.refreshing = true;
+    n.sdo.start_upload(cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, now, out);
+    return;
+  }
   const SdoRead r = n.plan.next();
   n.sdo.start_upload(r.index, r.sub, now, out);
 }
 
 void BusObserver::Impl::lose(uint8_t id, Node& n, uint64_t now) {
   n.sdo.cancel();
+  n.error_code_reads = 0;
+  n.refreshing = false;
   tpdo.forget(id);
   publish_health(n, now);
   if (n.published_axes) sink.dispose_axes(id, n.published_axes);
@@ -294,7 +343,7 @@ NodeHealthSample BusObserver::Impl::health_now(const Node& n, uint64_t now) cons
   s.product_code = info.product_code;
   s.revision = info.revision;
   s.serial = info.serial;
-  s.axes = info.axes;
+  s.axes = info.device_axes();
   s.heartbeat_age_ms = n.heartbeat.age_ms(now);
   s.bus = counters;
   return s;

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <iterator>
 
+#include "node/profiles/cia402/objects.hpp"
 #include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::bridge {
@@ -12,6 +13,7 @@ namespace {
 
 using od::SdoAbort;
 
+constexpr uint16_t kDeviceType = 0x1000;
 constexpr uint16_t kHeartbeatTime = 0x1017;
 constexpr uint16_t kIdentity = 0x1018;
 constexpr uint16_t kDeviceName = 0x1008;
@@ -25,6 +27,11 @@ constexpr size_t kMaxNameLength = 255;
 // What the snapshot reads of each axis, in this order.
 constexpr uint16_t kSnapshotOffsets[] = {0x01, 0x18, 0x19, 0x05, 0x06};
 constexpr uint8_t kSnapshotItems = std::size(kSnapshotOffsets);
+// What the snapshot reads of each CiA 402 axis (axis 1 indices), in this order.
+constexpr uint16_t kDriveSnapshotObjects[] = {
+    cia402::obj::kStatusword,     cia402::obj::kModesOfOperationDisplay, cia402::obj::kPositionActual,
+    cia402::obj::kVelocityActual, cia402::obj::kFollowingErrorActual,    cia402::obj::kErrorCode};
+constexpr uint8_t kDriveSnapshotItems = std::size(kDriveSnapshotObjects);
 
 // Little-endian unsigned of exactly `size` bytes; a value of another size is a device
 // error that retrying will not fix, so the caller takes it as absent.
@@ -57,11 +64,12 @@ void DiscoveryPlan::restart_all() {
 }
 
 void DiscoveryPlan::restart_tpdos() {
-  if (phase_ < Phase::TpdoComm || !info_.is_stepnode()) return;
+  if (phase_ < Phase::TpdoComm || !info_.has_axes()) return;
   // The snapshot is read again only when the remap came before it was finished.
   if (phase_ == Phase::Done) {
     snapshot_wanted_ = false;
     info_.snapshot = {};  // the caller seeds from it at the end: nothing stale
+    info_.drive_snapshot = {};
   }
   phase_ = Phase::TpdoComm;
   k_ = 0;
@@ -72,15 +80,18 @@ void DiscoveryPlan::restart_tpdos() {
 SdoRead DiscoveryPlan::next() const {
   switch (phase_) {
     case Phase::HeartbeatTime: return {kHeartbeatTime, 0};
+    case Phase::DeviceType: return {kDeviceType, 0};
     case Phase::Identity: return {kIdentity, static_cast<uint8_t>(k_)};
     case Phase::Name: return {kDeviceName, 0};
     case Phase::AxisProbe: return {horner::obj::index(k_, horner::obj::kStatusBits), 0};
+    case Phase::DriveProbe: return {cia402::obj::index(k_, cia402::obj::kSingleDeviceType), 0};
     case Phase::Pscale: return {horner::obj::index(k_, kPscaleOffset), 0};
     case Phase::TpdoComm: return {static_cast<uint16_t>(kTpdoComm + k_), 1};
     case Phase::TpdoCount: return {static_cast<uint16_t>(kTpdoMap + k_), 0};
     case Phase::TpdoEntry: return {static_cast<uint16_t>(kTpdoMap + k_), entry_};
     case Phase::Snapshot:
       return {horner::obj::index(k_, kSnapshotOffsets[entry_]), 0};
+    case Phase::DriveSnapshot: return {cia402::obj::index(k_, kDriveSnapshotObjects[entry_]), 0};
     case Phase::Done: break;
   }
   return {};
@@ -101,6 +112,13 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       if (exact_u32(d, 2, v)) {
         info_.heartbeat_period_ms = static_cast<uint16_t>(v);
         info_.heartbeat_period_read = true;
+      }
+      phase_ = Phase::DeviceType;
+      return;
+    case Phase::DeviceType:
+      if (exact_u32(d, 4, v)) {
+        info_.device_type = v;
+        info_.device_type_read = true;
       }
       phase_ = Phase::Identity;
       k_ = 1;
@@ -127,6 +145,10 @@ void DiscoveryPlan::value(const od::Bytes& d) {
     case Phase::AxisProbe:
       info_.axes = static_cast<uint8_t>(k_ + 1);
       if (++k_ >= kMaxAxes) after_axes();
+      return;
+    case Phase::DriveProbe:
+      info_.drive_axes = static_cast<uint8_t>(k_ + 1);
+      if (++k_ >= kMaxAxes) after_drives();
       return;
     case Phase::Pscale: {
       double scale = 1.0;
@@ -166,6 +188,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
     case Phase::Snapshot:
       snapshot_value(d);
       return next_snapshot();
+    case Phase::DriveSnapshot:
+      drive_snapshot_value(d);
+      return next_drive_snapshot();
     case Phase::Done: return;
   }
 }
@@ -173,6 +198,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
 void DiscoveryPlan::absent() {
   switch (phase_) {
     case Phase::HeartbeatTime:
+      phase_ = Phase::DeviceType;
+      return;
+    case Phase::DeviceType:
       phase_ = Phase::Identity;
       k_ = 1;
       return;
@@ -183,6 +211,7 @@ void DiscoveryPlan::absent() {
       return;
     case Phase::Name: return after_name();
     case Phase::AxisProbe: return after_axes();
+    case Phase::DriveProbe: return after_drives();
     case Phase::Pscale:
       info_.pscale[k_] = 1.0;
       if (++k_ >= info_.axes) {
@@ -194,28 +223,40 @@ void DiscoveryPlan::absent() {
     case Phase::TpdoCount:
     case Phase::TpdoEntry: return next_tpdo();  // this TPDO's mapping unreadable: skipped
     case Phase::Snapshot: return next_snapshot();  // e.g. no HP objects on this node
+    case Phase::DriveSnapshot: return next_drive_snapshot();  // e.g. no 60F4h
     case Phase::Done: return;
   }
 }
 
 void DiscoveryPlan::after_name() {
   // Only a stepnode has axis blocks worth probing; a third-party device's 0x2001 means
-  // something else entirely.
-  if (info_.product_code != kStepnodeProductCode) {
-    phase_ = Phase::Done;
-    return;
-  }
-  phase_ = Phase::AxisProbe;
+  // something else entirely. A third-party CiA 402 drive has its standard objects.
   k_ = 0;
+  if (info_.product_code == kStepnodeProductCode) phase_ = Phase::AxisProbe;
+  else if (info_.device_type_is_cia402()) phase_ = Phase::DriveProbe;
+  else phase_ = Phase::Done;
 }
 
 void DiscoveryPlan::after_axes() {
-  if (info_.axes == 0) {  // "STEP" product code without 0x2001: not ours after all
+  // A stepnode (the only way here): its CiA 402 axes, if the profile is on. The probe is
+  // made whatever 1000h said: 67FFh is what says it per axis.
+  phase_ = Phase::DriveProbe;
+  k_ = 0;
+}
+
+void DiscoveryPlan::after_drives() {
+  // 67FFh is for devices with several axes; a single-axis drive may leave it out.
+  if (info_.drive_axes == 0 && info_.device_type_is_cia402()) info_.drive_axes = 1;
+  if (!info_.has_axes()) {  // "STEP" product code without 0x2001 or 67FFh: not ours after all
     phase_ = Phase::Done;
     return;
   }
-  phase_ = Phase::Pscale;
+  to_pscale_or_tpdos();
+}
+
+void DiscoveryPlan::to_pscale_or_tpdos() {
   k_ = 0;
+  phase_ = info_.axes > 0 ? Phase::Pscale : Phase::TpdoComm;
 }
 
 void DiscoveryPlan::next_tpdo() {
@@ -233,9 +274,12 @@ void DiscoveryPlan::tpdos_done() {
     return;
   }
   info_.snapshot = {};
-  phase_ = Phase::Snapshot;
+  info_.drive_snapshot = {};
   k_ = 0;
   entry_ = 0;
+  if (info_.axes > 0) phase_ = Phase::Snapshot;
+  else if (info_.drive_axes > 0) phase_ = Phase::DriveSnapshot;
+  else phase_ = Phase::Done;
 }
 
 void DiscoveryPlan::snapshot_value(const od::Bytes& d) {
@@ -263,7 +307,40 @@ void DiscoveryPlan::snapshot_value(const od::Bytes& d) {
 void DiscoveryPlan::next_snapshot() {
   if (++entry_ < kSnapshotItems) return;
   entry_ = 0;
-  if (++k_ >= info_.axes) phase_ = Phase::Done;
+  if (++k_ < info_.axes) return;
+  k_ = 0;
+  phase_ = info_.drive_axes > 0 ? Phase::DriveSnapshot : Phase::Done;
+}
+
+void DiscoveryPlan::drive_snapshot_value(const od::Bytes& d) {
+  DriveSnapshot& s = info_.drive_snapshot[k_];
+  uint32_t v = 0;
+  switch (kDriveSnapshotObjects[entry_]) {
+    case cia402::obj::kStatusword:
+      if ((s.statusword_read = exact_u32(d, 2, v))) s.statusword = static_cast<uint16_t>(v);
+      break;
+    case cia402::obj::kModesOfOperationDisplay:
+      if ((s.mode_read = exact_u32(d, 1, v))) s.mode_display = static_cast<int8_t>(v);
+      break;
+    case cia402::obj::kPositionActual:
+      if ((s.position_read = exact_u32(d, 4, v))) s.position_actual = static_cast<int32_t>(v);
+      break;
+    case cia402::obj::kVelocityActual:
+      if ((s.velocity_read = exact_u32(d, 4, v))) s.velocity_actual = static_cast<int32_t>(v);
+      break;
+    case cia402::obj::kFollowingErrorActual:
+      if ((s.following_error_read = exact_u32(d, 4, v))) s.following_error = static_cast<int32_t>(v);
+      break;
+    case cia402::obj::kErrorCode:
+      if ((s.error_code_read = exact_u32(d, 2, v))) s.error_code = static_cast<uint16_t>(v);
+      break;
+  }
+}
+
+void DiscoveryPlan::next_drive_snapshot() {
+  if (++entry_ < kDriveSnapshotItems) return;
+  entry_ = 0;
+  if (++k_ >= info_.drive_axes) phase_ = Phase::Done;
 }
 
 }  // namespace stepnode::bridge

@@ -3,12 +3,17 @@
 // order and the decisions ("absent" vs "failed, try again") are tested on their own.
 //
 // Order: heartbeat time 0x1017 first (the heartbeat-loss timeout needs it before a second
-// heartbeat was seen), identity 0x1018:1..4, name 0x1008; then, for a stepnode only,
-// axis blocks 0x2n01 (n = 0.. until "no object"), PSCALE 0x2n11 per axis, and every TPDO
-// 0x1800+k:1 until "no object" with the mapping 0x1A00+k:0..n of the valid ones; last, a
-// snapshot of each axis (status 0x2n01, DONE? 0x2n18, HP error 0x2n19, motor and encoder
-// position 0x2n05/0x2n06), read after the mapping so the TPDO decoder is already live
-// (the caller installs it when mapping_read() turns true) and newer TPDO values win.
+// heartbeat was seen), device type 0x1000, identity 0x1018:1..4, name 0x1008; then, for a
+// stepnode only, axis blocks 0x2n01 (n = 0.. until "no object"); for a stepnode or a
+// device whose 1000h says CiA 402 (bits 0-15 = 0x192), the CiA 402 axes 67FFh + 0x800 * a
+// (a = 0.. until "no object"; a 402 device without 67FFh has one axis). A CiA 402 only
+// stepnode has no 0x2n01: it is found by its 67FFh. For a device with axes of either
+// kind: PSCALE 0x2n11 per Horner axis, and every TPDO 0x1800+k:1 until "no object" with
+// the mapping 0x1A00+k:0..n of the valid ones; last, a snapshot of each Horner axis
+// (status 0x2n01, DONE? 0x2n18, HP error 0x2n19, motor and encoder position 0x2n05/0x2n06)
+// and of each CiA 402 axis (6041h, 6061h, 6064h, 606Ch, 60F4h, 603Fh + 0x800 * a), read
+// after the mapping so the TPDO decoder is already live (the caller installs it when
+// mapping_read() turns true) and newer TPDO values win.
 #pragma once
 #include <cstdint>
 
@@ -41,7 +46,8 @@ class DiscoveryPlan {
   // From the first read: after a boot-up, or a node seen again after it was lost.
   void restart_all();
   // Only the TPDO parameters again (another master remapped one). Identity and axes are
-  // kept. No effect before the TPDO phase (it is still to come) or on a non-stepnode.
+  // kept. No effect before the TPDO phase (it is still to come) or on a device without
+  // axes (its TPDOs are not decoded).
   void restart_tpdos();
 
   bool finished() const { return phase_ == Phase::Done; }
@@ -55,27 +61,35 @@ class DiscoveryPlan {
  private:
   enum class Phase : uint8_t {
     HeartbeatTime,
+    DeviceType,
     Identity,
     Name,
     AxisProbe,
+    DriveProbe,
     Pscale,
     TpdoComm,
     TpdoCount,
     TpdoEntry,
     Snapshot,
+    DriveSnapshot,
     Done,
   };
   void value(const od::Bytes& data);
   void absent();
   void after_name();
   void after_axes();
+  void after_drives();
+  void to_pscale_or_tpdos();
   void next_tpdo();
   void tpdos_done();
   void snapshot_value(const od::Bytes& d);
+  void drive_snapshot_value(const od::Bytes& d);
   void next_snapshot();
+  void next_drive_snapshot();
 
   Phase phase_ = Phase::HeartbeatTime;
   uint16_t k_ = 0;     // identity sub, axis or TPDO number, by phase
+  // (entry_ is also the item of the axis being read in the snapshot phases)
   uint8_t entry_ = 0;  // mapping entry being read (1-based)
   uint8_t count_ = 0;  // mapping entries of TPDO k_
   bool snapshot_wanted_ = true;  // not after a remap: the values are known then

@@ -1,5 +1,6 @@
 #include "bridge/observer/tpdo_decoder.hpp"
 
+#include "node/profiles/cia402/objects.hpp"
 #include "node/profiles/horner/objects.hpp"
 
 namespace stepnode::bridge {
@@ -9,6 +10,24 @@ constexpr uint16_t kAxisBlocksFirst = 0x2000;
 constexpr uint16_t kAxisBlocksLast = 0x2000 + 0x100 * kMaxAxes - 1;
 constexpr uint16_t kDoneCodeOffset = 0x18;
 constexpr uint16_t kHpErrorOffset = 0x19;
+constexpr uint16_t kDriveFirst = 0x6000;
+constexpr uint16_t kDriveLast = kDriveFirst + cia402::kAxisOffset * kMaxAxes - 1;  // 0x9FFF
+constexpr uint16_t kStatuswordFault = 1u << 3;  // 6041h bit 3
+
+MappedAxisField drive_field_of(const od::MappedEntry& e) {
+  const auto axis = static_cast<uint8_t>((e.index - kDriveFirst) / cia402::kAxisOffset);
+  const auto base = static_cast<uint16_t>(kDriveFirst + (e.index - kDriveFirst) % cia402::kAxisOffset);
+  using namespace cia402::obj;
+  switch (base) {
+    case kStatusword: return {axis, AxisField::DriveStatusword};
+    case kModesOfOperationDisplay: return {axis, AxisField::DriveModeDisplay};
+    case kPositionActual: return {axis, AxisField::DrivePosition};
+    case kVelocityActual: return {axis, AxisField::DriveVelocity};
+    case kFollowingErrorActual: return {axis, AxisField::DriveFollowingError};
+    case kErrorCode: return {axis, AxisField::DriveErrorCode};
+    default: return {};
+  }
+}
 
 int64_t sign_extend(uint64_t v, unsigned bits) {
   if (bits == 0 || bits >= 64) return static_cast<int64_t>(v);
@@ -19,7 +38,9 @@ int64_t sign_extend(uint64_t v, unsigned bits) {
 }  // namespace
 
 MappedAxisField axis_field_of(const od::MappedEntry& e) {
-  if (e.index < kAxisBlocksFirst || e.index > kAxisBlocksLast || e.sub != 0) return {};
+  if (e.sub != 0) return {};
+  if (e.index >= kDriveFirst && e.index <= kDriveLast) return drive_field_of(e);
+  if (e.index < kAxisBlocksFirst || e.index > kAxisBlocksLast) return {};
   const auto axis = static_cast<uint8_t>((e.index - kAxisBlocksFirst) >> 8);
   using namespace horner::obj;
   switch (e.index & 0xFF) {
@@ -47,6 +68,8 @@ void TpdoDecoder::install(uint8_t node, const NodeInfo& info) {
   NodeTpdos& n = nodes_[node];
   n.tpdos.clear();
   n.axis_count = info.axes;
+  n.drive_count = info.drive_axes;
+  n.error_code_mapped = 0;
   for (unsigned a = 0; a < kMaxAxes; ++a) n.axes[a].pscale = info.pscale[a];
   for (const TpdoInfo& t : info.tpdos) {
     // CiA 301 limits a mapping to 64 bits; a longer one cannot come from a real device and
@@ -59,9 +82,11 @@ void TpdoDecoder::install(uint8_t node, const NodeInfo& info) {
     unsigned offset = 0;
     for (const od::MappedEntry& e : t.mapping) {
       const MappedAxisField m = axis_field_of(e);
-      if (m.field != AxisField::None && m.axis < info.axes && e.bits > 0 &&
-          c.field_count < c.fields.size())
+      const unsigned axes = is_drive_field(m.field) ? info.drive_axes : info.axes;
+      if (m.field != AxisField::None && m.axis < axes && e.bits > 0 && c.field_count < c.fields.size()) {
         c.fields[c.field_count++] = Field{static_cast<uint8_t>(offset), e.bits, m.axis, m.field};
+        if (m.field == AxisField::DriveErrorCode) n.error_code_mapped |= static_cast<uint8_t>(1u << m.axis);
+      }
       offset += e.bits;
     }
     n.tpdos.push_back(c);
@@ -88,6 +113,8 @@ void TpdoDecoder::forget(uint8_t node) {
     a = AxisState{};
     a.pscale = pscale;
   }
+  n.drives = {};
+  n.error_code_stale = 0;
 }
 
 void TpdoDecoder::suspend(uint8_t node, uint16_t tpdo_number) {
@@ -106,7 +133,7 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
   uint64_t raw = 0;
   for (unsigned i = 0; i < 8; ++i) raw |= uint64_t{f.data[i]} << (8 * i);
 
-  uint8_t status_changed = 0, position_touched = 0;  // bit per axis
+  uint8_t status_changed = 0, position_touched = 0, drive_touched = 0;  // bit per axis
   for (unsigned i = 0; i < t.field_count; ++i) {
     const Field& fl = t.fields[i];
     uint64_t v = raw >> fl.bit_offset;
@@ -149,6 +176,15 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
         a.motion_phase = static_cast<uint8_t>(v);
         position_touched |= bit;
         break;
+      case AxisField::DriveStatusword:
+      case AxisField::DriveModeDisplay:
+      case AxisField::DrivePosition:
+      case AxisField::DriveVelocity:
+      case AxisField::DriveFollowingError:
+      case AxisField::DriveErrorCode:
+        n.drives[fl.axis].from_tpdo |= set_drive(n, fl.axis, fl.field, v, fl.bits);
+        drive_touched |= bit;
+        break;
       case AxisField::None: break;
     }
   }
@@ -157,7 +193,47 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
     if (status_changed & (1u << ax)) publish_status(slot.node, ax, of.can_time_ns);
   for (unsigned ax = 0; position_touched && ax < kMaxAxes; ++ax)
     if (position_touched & (1u << ax)) publish_position(slot.node, ax, of.can_time_ns);
+  for (unsigned ax = 0; drive_touched && ax < kMaxAxes; ++ax)
+    if (drive_touched & (1u << ax)) publish_drive(slot.node, ax, of.can_time_ns);
   return Result::Decoded;
+}
+
+uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t v, unsigned bits) {
+  DriveAxisState& d = n.drives[axis];
+  const auto i32 = [&] { return static_cast<int32_t>(sign_extend(v, bits)); };
+  switch (field) {
+    case AxisField::DriveStatusword: {
+      const auto s = static_cast<uint16_t>(v);
+      // A fault came or was reset: 603Fh changed with it (unless a TPDO brings it anyway).
+      const uint16_t fault_edge = (d.statusword_known ? d.statusword ^ s : s) & kStatuswordFault;
+      if (fault_edge && !(n.error_code_mapped & (1u << axis))) n.error_code_stale |= static_cast<uint8_t>(1u << axis);
+      d.statusword = s;
+      d.statusword_known = true;
+      return kDriveStatusword;
+    }
+    case AxisField::DriveModeDisplay:
+      d.mode_display = static_cast<int8_t>(sign_extend(v, bits));
+      return kDriveMode;
+    case AxisField::DrivePosition: d.position_actual = i32(); return kDrivePosition;
+    case AxisField::DriveVelocity: d.velocity_actual = i32(); return kDriveVelocity;
+    case AxisField::DriveFollowingError: d.following_error = i32(); return kDriveFollowingError;
+    case AxisField::DriveErrorCode: d.error_code = static_cast<uint16_t>(v); return kDriveErrorCode;
+    default: return 0;
+  }
+}
+
+void TpdoDecoder::apply_read(uint8_t node, uint16_t index, uint8_t sub, const od::Bytes& data, uint64_t can_time_ns) {
+  if (node == 0 || node >= kNodeIds || data.empty() || data.size() > 4) return;
+  NodeTpdos& n = nodes_[node];
+  const auto bits = static_cast<uint8_t>(8 * data.size());
+  const MappedAxisField m = axis_field_of(od::MappedEntry{index, sub, bits});
+  if (!is_drive_field(m.field) || m.axis >= n.drive_count) return;
+  uint64_t v = 0;
+  for (size_t i = 0; i < data.size(); ++i) v |= uint64_t{data[i]} << (8 * i);
+  set_drive(n, m.axis, m.field, v, bits);
+  // (the stale mark a statusword read could set is not wanted: this is already a read)
+  if (m.field == AxisField::DriveStatusword) n.error_code_stale &= static_cast<uint8_t>(~(1u << m.axis));
+  publish_drive(node, m.axis, can_time_ns);
 }
 
 }  // namespace stepnode::bridge
@@ -195,6 +271,22 @@ void TpdoDecoder::publish_position(uint8_t node, unsigned axis, uint64_t can_tim
   sink_.axis_position(p);
 }
 
+void TpdoDecoder::publish_drive(uint8_t node, unsigned axis, uint64_t can_time_ns) {
+  const DriveAxisState& d = nodes_[node].drives[axis];
+  DriveStatusSample s;
+  s.node = node;
+  s.axis = static_cast<uint8_t>(axis + 1);
+  s.statusword_known = d.statusword_known;
+  s.statusword = d.statusword;
+  s.mode_display = d.mode_display;
+  s.position_actual = d.position_actual;
+  s.velocity_actual = d.velocity_actual;
+  s.following_error = d.following_error;
+  s.error_code = d.error_code;
+  s.can_time_ns = can_time_ns;
+  sink_.drive_status(s);
+}
+
 void TpdoDecoder::seed(uint8_t node, const NodeInfo& info, uint64_t can_time_ns) {
   if (node == 0 || node >= kNodeIds) return;
   NodeTpdos& n = nodes_[node];
@@ -213,6 +305,25 @@ void TpdoDecoder::seed(uint8_t node, const NodeInfo& info, uint64_t can_time_ns)
       a.encoder_position = snap.encoder_position;
       publish_position(node, ax, can_time_ns);
     }
+  }
+  // CiA 402 axes: each value a TPDO has not brought since install() (a TPDO is newer).
+  for (unsigned ax = 0; ax < info.drive_axes && ax < kMaxAxes; ++ax) {
+    const DriveSnapshot& snap = info.drive_snapshot[ax];
+    DriveAxisState& d = n.drives[ax];
+    bool seeded = false;
+    auto take = [&](bool read, DriveBit bit, auto& field, auto value) {
+      if (!read || (d.from_tpdo & bit)) return;
+      field = value;
+      seeded = true;
+    };
+    if (snap.statusword_read && !(d.from_tpdo & kDriveStatusword)) d.statusword_known = true;
+    take(snap.statusword_read, kDriveStatusword, d.statusword, snap.statusword);
+    take(snap.mode_read, kDriveMode, d.mode_display, snap.mode_display);
+    take(snap.position_read, kDrivePosition, d.position_actual, snap.position_actual);
+    take(snap.velocity_read, kDriveVelocity, d.velocity_actual, snap.velocity_actual);
+    take(snap.following_error_read, kDriveFollowingError, d.following_error, snap.following_error);
+    take(snap.error_code_read, kDriveErrorCode, d.error_code, snap.error_code);
+    if (seeded) publish_drive(node, ax, can_time_ns);
   }
 }
 

@@ -77,7 +77,7 @@ class Watcher {
     participant_ = bridge::dds::create_participant(p);
     subscriber_ = participant_->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
     if (!subscriber_) throw std::runtime_error("Fast DDS could not create a subscriber");
-    const std::array<int32_t, 4> depth{64, 16, 8, 32};  // status, position, health, emergency
+    const std::array<int32_t, bridge::dds::kTopicCount> depth{64, 16, 8, 32, 64};  // status, position, health, emergency, drive
     for (TopicKind kind : bridge::dds::kAllTopics) {
       size_t i = static_cast<size_t>(kind);
       std::string type = bridge::dds::type_name(kind, naming_);
@@ -120,6 +120,11 @@ class Watcher {
       emit(now, "emergency", stepwatch::to_json(e), stepwatch::csv_row(now, e));
       return std::pair<uint8_t, uint8_t>{e.node(), 0};
     });
+    n += take<::stepnode::DriveStatus>(TopicKind::DriveStatus, [&](const auto& d, uint64_t now) {
+      model_.on_drive(d);
+      emit(now, "drive_status", stepwatch::to_json(d), stepwatch::csv_row(now, d));
+      return std::pair<uint8_t, uint8_t>{d.node(), d.axis()};
+    });
     if (csv_) csv_.flush();
     return n;
   }
@@ -156,7 +161,8 @@ class Watcher {
         // In ROS 2 mode the topics are unkeyed: one instance holds every axis, and its end
         // (the bridge left) says nothing about the last axis seen. Keyed: that axis is gone.
         if (naming_.ros2) continue;
-        if (kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition) model_.on_axis_disposed(node, axis);
+        if (kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition || kind == TopicKind::DriveStatus)
+          model_.on_axis_disposed(node, axis);
         emit(now, "disposed", {{"topic", topic}, {"node", node}, {"axis", axis}},
              stepwatch::csv_disposed_row(now, topic, node, axis));
       }
@@ -177,7 +183,7 @@ class Watcher {
   bridge::dds::Naming naming_;
   efd::DomainParticipant* participant_ = nullptr;
   efd::Subscriber* subscriber_ = nullptr;
-  std::array<efd::DataReader*, 4> readers_{};
+  std::array<efd::DataReader*, bridge::dds::kTopicCount> readers_{};
   std::map<eprosima::fastrtps::rtps::InstanceHandle_t, std::pair<uint8_t, uint8_t>> instances_;
   stepwatch::WatchModel model_;
   std::ofstream csv_;

@@ -127,6 +127,72 @@ nlohmann::json to_json(const ::stepnode::Emergency& e) {
           {"manufacturer", manufacturer}, {"text", e.text()}, {"can_time_ns", e.can_time_ns()}};
 }
 
+namespace {
+
+std::string mode_text(int8_t mode) {
+  switch (mode) {  // 6060h/6061h
+    case 0: return "no mode";
+    case 1: return "pp";
+    case 3: return "pv";
+    case 6: return "hm";
+    case 7: return "ip";
+    case 8: return "csp";
+    case 9: return "csv";
+    default: return "mode " + std::to_string(mode);
+  }
+}
+
+}  // namespace
+
+std::string drive_words(const ::stepnode::DriveStatus& d) {
+  std::string out = std::string(bridge::dds::drive_state_text(d.state())) + ", " + mode_text(d.mode_display());
+  auto add = [&](bool on, const char* word) {
+    if (on) out += std::string(" ") + word;
+  };
+  add(d.warning(), "warning");
+  add(d.target_reached(), "target_reached");
+  add(d.internal_limit_active(), "internal_limit");
+  add(d.bit12(), "bit12");
+  add(d.bit13(), "bit13");
+  if (d.error_code()) out += fmt::format(" error 0x{:04X}", d.error_code());
+  return out;
+}
+
+nlohmann::json to_json(const ::stepnode::DriveStatus& d) {
+  return {{"node", d.node()},
+          {"axis", d.axis()},
+          {"statusword", d.statusword()},
+          {"state", std::string(bridge::dds::drive_state_text(d.state()))},
+          {"mode_display", d.mode_display()},
+          {"position_actual", d.position_actual()},
+          {"velocity_actual", d.velocity_actual()},
+          {"following_error", d.following_error()},
+          {"error_code", d.error_code()},
+          {"ready_to_switch_on", d.ready_to_switch_on()},
+          {"switched_on", d.switched_on()},
+          {"operation_enabled", d.operation_enabled()},
+          {"fault", d.fault()},
+          {"voltage_enabled", d.voltage_enabled()},
+          {"quick_stop", d.quick_stop()},
+          {"switch_on_disabled", d.switch_on_disabled()},
+          {"warning", d.warning()},
+          {"remote", d.remote()},
+          {"target_reached", d.target_reached()},
+          {"internal_limit_active", d.internal_limit_active()},
+          {"bit12", d.bit12()},
+          {"bit13", d.bit13()},
+          {"can_time_ns", d.can_time_ns()},
+          {"publish_time_ns", d.publish_time_ns()}};
+}
+
+void WatchModel::on_drive(const ::stepnode::DriveStatus& d) {
+  auto& row = axes_[key(d.node(), d.axis())];
+  row.node = d.node();
+  row.axis = d.axis();
+  row.drive = d;
+  ++samples_;
+}
+
 void WatchModel::on_status(const ::stepnode::AxisStatus& s) {
   auto& row = axes_[key(s.node(), s.axis())];
   row.node = s.node();
@@ -168,6 +234,7 @@ std::vector<nlohmann::json> WatchModel::snapshot() const {
     nlohmann::json j = {{"type", "axis"}, {"node", row.node}, {"axis", row.axis}};
     j["status"] = row.status ? to_json(*row.status) : nlohmann::json(nullptr);
     j["position"] = row.position ? to_json(*row.position) : nlohmann::json(nullptr);
+    if (row.drive) j["drive"] = to_json(*row.drive);
     out.push_back(std::move(j));
   }
   return out;
@@ -201,6 +268,14 @@ std::string WatchModel::table() const {
     std::string phase = row.position ? std::to_string(row.position->motion_phase()) : "-";
     std::string errors = row.status ? fmt::format("0x{:02X}", row.status->error_bits()) : "-";
     std::string words = row.status ? status_words(*row.status) : "-";
+    if (row.drive) {
+      // A CiA 402 axis: its actual values where no Horner position came, and its state.
+      if (!row.position) {
+        pos = std::to_string(row.drive->position_actual());
+        vel = std::to_string(row.drive->velocity_actual());
+      }
+      words = (row.status ? words + " | " : std::string()) + "402: " + drive_words(*row.drive);
+    }
     out += fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "", row.axis, pos, enc, vel, phase,
                        errors, words);
   }
@@ -253,6 +328,21 @@ std::string csv_row(uint64_t recv, const ::stepnode::Emergency& e) {
   r.code = fmt::format("0x{:04X}", e.code());
   r.text = csv_quote(e.text());
   r.can_time = std::to_string(e.can_time_ns());
+  return r.str();
+}
+
+std::string csv_row(uint64_t recv, const ::stepnode::DriveStatus& d) {
+  Row r(recv, "DriveStatus");
+  r.node = std::to_string(d.node());
+  r.axis = std::to_string(d.axis());
+  r.status_bits = fmt::format("0x{:04X}", d.statusword());
+  r.motor = std::to_string(d.position_actual());
+  r.velocity = std::to_string(d.velocity_actual());
+  r.state = std::string(bridge::dds::drive_state_text(d.state()));
+  r.code = fmt::format("0x{:04X}", d.error_code());
+  r.text = csv_quote(drive_words(d));
+  r.can_time = std::to_string(d.can_time_ns());
+  r.publish_time = std::to_string(d.publish_time_ns());
   return r.str();
 }
 

@@ -1,6 +1,6 @@
-// stepwatch's view of the bridge's topics: the latest status and position of every axis,
-// the health of every node, the last EMCY of each node; rendered as a table, JSON lines
-// or CSV rows. Pure (no DDS entities), so it is tested without a participant.
+// stepwatch's view of the bridge's topics: the latest status and position of every axis
+// (and its CiA 402 drive status), the health of every node, the last EMCY of each node;
+// rendered as a table, JSON lines or CSV rows. Pure (no DDS entities), so it is tested without a participant.
 #pragma once
 #include <stepnodePubSubTypes.h>
 
@@ -18,6 +18,7 @@ struct AxisRow {
   uint8_t axis = 0;
   std::optional<::stepnode::AxisStatus> status;
   std::optional<::stepnode::AxisPosition> position;
+  std::optional<::stepnode::DriveStatus> drive;  // a CiA 402 axis
 };
 
 class WatchModel {
@@ -26,6 +27,7 @@ class WatchModel {
   void on_position(const ::stepnode::AxisPosition& p);
   void on_health(const ::stepnode::NodeHealth& h);
   void on_emergency(const ::stepnode::Emergency& e);
+  void on_drive(const ::stepnode::DriveStatus& d);
   // The bridge disposed the axis (node lost): the row goes.
   void on_axis_disposed(uint8_t node, uint8_t axis);
 
@@ -34,8 +36,8 @@ class WatchModel {
   bool empty() const { return axes_.empty() && nodes_.empty(); }
   uint64_t samples() const { return samples_; }
 
-  // One JSON object per node ({"type":"node",...}) then per axis ({"type":"axis",...}),
-  // ordered by node and axis.
+  // One JSON object per node ({"type":"node",...}) then per axis ({"type":"axis",...},
+  // with "drive" for a CiA 402 axis), ordered by node and axis.
   std::vector<nlohmann::json> snapshot() const;
   // The live table: one line per axis under its node's line.
   std::string table() const;
@@ -51,6 +53,9 @@ nlohmann::json to_json(const ::stepnode::AxisStatus& s);
 nlohmann::json to_json(const ::stepnode::AxisPosition& p);
 nlohmann::json to_json(const ::stepnode::NodeHealth& h);
 nlohmann::json to_json(const ::stepnode::Emergency& e);
+nlohmann::json to_json(const ::stepnode::DriveStatus& d);
+// "Operation enabled, pp, target_reached remote" (state, mode, set bits by name).
+std::string drive_words(const ::stepnode::DriveStatus& d);
 // "moving accelerating position_valid" (set bits by name, %I order); "-" when none.
 std::string status_words(const ::stepnode::AxisStatus& s);
 
@@ -61,6 +66,7 @@ std::string csv_row(uint64_t recv_time_ns, const ::stepnode::AxisStatus& s);
 std::string csv_row(uint64_t recv_time_ns, const ::stepnode::AxisPosition& p);
 std::string csv_row(uint64_t recv_time_ns, const ::stepnode::NodeHealth& h);
 std::string csv_row(uint64_t recv_time_ns, const ::stepnode::Emergency& e);
+std::string csv_row(uint64_t recv_time_ns, const ::stepnode::DriveStatus& d);
 std::string csv_disposed_row(uint64_t recv_time_ns, const char* topic, uint8_t node, uint8_t axis);
 
 }  // namespace stepnode::stepwatch

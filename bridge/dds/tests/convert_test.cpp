@@ -1,6 +1,8 @@
 // Sample structs -> IDL types, field by field; every status bit by name.
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include "bridge/dds/convert.hpp"
 
 namespace stepnode::bridge::dds {
@@ -166,6 +168,94 @@ TEST(Convert, EmergencyFields) {
   EXPECT_EQ(d.manufacturer(), (std::array<uint8_t, 5>{1, 2, 3, 4, 5}));
   EXPECT_EQ(d.text(), "device specific: axis 1 motor stalled");
   EXPECT_EQ(d.can_time_ns(), 77u);
+}
+
+TEST(Convert, DriveStatusOperationEnabledFromTheStandard) {
+  // 0x0637: ready to switch on, switched on, operation enabled (state coding x01x 0111),
+  // voltage enabled, quick stop (not active), remote, target reached.
+  DriveStatusSample s;
+  s.node = 5;
+  s.axis = 2;
+  s.statusword_known = true;
+  s.statusword = 0x0637;
+  s.mode_display = 1;
+  s.position_actual = -1000;
+  s.velocity_actual = 2500;
+  s.following_error = -7;
+  s.error_code = 0x8611;
+  s.can_time_ns = 11;
+  s.publish_time_ns = 22;
+  auto d = to_idl(s);
+  EXPECT_EQ(d.node(), 5);
+  EXPECT_EQ(d.axis(), 2);
+  EXPECT_EQ(d.statusword(), 0x0637);
+  EXPECT_EQ(d.state(), ::stepnode::DRIVE_OPERATION_ENABLED);
+  EXPECT_EQ(drive_state_text(d.state()), "Operation enabled");
+  EXPECT_EQ(d.mode_display(), 1);
+  EXPECT_EQ(d.position_actual(), -1000);
+  EXPECT_EQ(d.velocity_actual(), 2500);
+  EXPECT_EQ(d.following_error(), -7);
+  EXPECT_EQ(d.error_code(), 0x8611);
+  EXPECT_TRUE(d.ready_to_switch_on());
+  EXPECT_TRUE(d.switched_on());
+  EXPECT_TRUE(d.operation_enabled());
+  EXPECT_FALSE(d.fault());
+  EXPECT_TRUE(d.voltage_enabled());
+  EXPECT_TRUE(d.quick_stop());
+  EXPECT_FALSE(d.switch_on_disabled());
+  EXPECT_FALSE(d.warning());
+  EXPECT_TRUE(d.remote());
+  EXPECT_TRUE(d.target_reached());
+  EXPECT_FALSE(d.internal_limit_active());
+  EXPECT_FALSE(d.bit12());
+  EXPECT_FALSE(d.bit13());
+  EXPECT_EQ(d.can_time_ns(), 11u);
+  EXPECT_EQ(d.publish_time_ns(), 22u);
+}
+
+TEST(Convert, EveryDriveStatuswordBitByName) {
+  struct Bit {
+    uint16_t mask;
+    bool (::stepnode::DriveStatus::*get)() const;
+  };
+  using D = ::stepnode::DriveStatus;
+  const Bit bits[] = {
+      {1u << 0, &D::ready_to_switch_on}, {1u << 1, &D::switched_on},     {1u << 2, &D::operation_enabled},
+      {1u << 3, &D::fault},              {1u << 4, &D::voltage_enabled}, {1u << 5, &D::quick_stop},
+      {1u << 6, &D::switch_on_disabled}, {1u << 7, &D::warning},         {1u << 9, &D::remote},
+      {1u << 10, &D::target_reached},    {1u << 11, &D::internal_limit_active},
+      {1u << 12, &D::bit12},             {1u << 13, &D::bit13},
+  };
+  for (const Bit& b : bits) {
+    DriveStatusSample s;
+    s.statusword_known = true;
+    s.statusword = b.mask;
+    auto one = to_idl(s);
+    for (const Bit& other : bits) EXPECT_EQ((one.*other.get)(), other.mask == b.mask) << std::hex << b.mask << " vs " << other.mask;
+  }
+}
+
+TEST(Convert, DriveStatesAndTheirNames) {
+  const std::tuple<uint16_t, ::stepnode::DriveState, const char*> states[] = {
+      {0x0200, ::stepnode::DRIVE_NOT_READY_TO_SWITCH_ON, "Not ready to switch on"},
+      {0x0250, ::stepnode::DRIVE_SWITCH_ON_DISABLED, "Switch on disabled"},
+      {0x0231, ::stepnode::DRIVE_READY_TO_SWITCH_ON, "Ready to switch on"},
+      {0x0233, ::stepnode::DRIVE_SWITCHED_ON, "Switched on"},
+      {0x1237, ::stepnode::DRIVE_OPERATION_ENABLED, "Operation enabled"},
+      {0x0217, ::stepnode::DRIVE_QUICK_STOP_ACTIVE, "Quick stop active"},
+      {0x021F, ::stepnode::DRIVE_FAULT_REACTION_ACTIVE, "Fault reaction active"},
+      {0x0208, ::stepnode::DRIVE_FAULT, "Fault"},
+      {0x0009, ::stepnode::DRIVE_UNKNOWN, "unknown"},  // no such state coding
+  };
+  for (auto [sw, state, text] : states) {
+    DriveStatusSample s;
+    s.statusword_known = true;
+    s.statusword = sw;
+    EXPECT_EQ(to_idl(s).state(), state) << std::hex << sw;
+    EXPECT_EQ(drive_state_text(state), text);
+  }
+  DriveStatusSample never;  // no statusword seen yet (a TPDO with positions only)
+  EXPECT_EQ(to_idl(never).state(), ::stepnode::DRIVE_UNKNOWN);
 }
 
 }  // namespace

@@ -127,6 +127,55 @@ TEST(DdsSmoke, LateJoinerGetsTheCurrentStatusOfEveryAxisThenTheDispose) {
   EXPECT_EQ(publisher.write_failures(), 0u);
 }
 
+TEST(DdsSmoke, LateJoinerGetsEveryDrivesStateThenTheDispose) {
+  uint32_t domain = random_domain();
+  PublisherOptions options;
+  options.participant.domain = domain;
+  DdsPublisher publisher(options);
+  DriveStatusSample d;
+  d.node = 5;
+  d.axis = 1;
+  d.statusword_known = true;
+  d.statusword = 0x0250;
+  publisher.drive_status(d);
+  d.statusword = 0x0637;  // KEEP_LAST 1: only this one survives
+  d.mode_display = 1;
+  d.position_actual = 4000;
+  d.can_time_ns = realtime_ns();
+  publisher.drive_status(d);
+  d.axis = 2;
+  d.statusword = 0x0218;
+  d.error_code = 0x8611;
+  publisher.drive_status(d);
+
+  TestReader reader(domain, TopicKind::DriveStatus, Naming{});  // joins after the writes
+  std::map<int, ::stepnode::DriveStatus> seen;
+  for (int i = 0; i < 2; ++i) {
+    auto s = reader.next<::stepnode::DriveStatus>(std::chrono::seconds(10));
+    ASSERT_TRUE(s) << "sample " << i << " of the late joiner";
+    seen[s->axis()] = *s;
+  }
+  EXPECT_EQ(seen[1].state(), ::stepnode::DRIVE_OPERATION_ENABLED);
+  EXPECT_EQ(seen[1].statusword(), 0x0637);
+  EXPECT_EQ(seen[1].position_actual(), 4000);
+  EXPECT_TRUE(seen[1].target_reached());
+  EXPECT_GE(seen[1].publish_time_ns(), d.can_time_ns);
+  EXPECT_EQ(seen[2].state(), ::stepnode::DRIVE_FAULT);
+  EXPECT_EQ(seen[2].error_code(), 0x8611);
+
+  publisher.dispose_axes(5, 2);
+  int disposed = 0;
+  for (int i = 0; i < 2; ++i) {
+    efd::SampleInfo info;
+    auto s = reader.next<::stepnode::DriveStatus>(std::chrono::seconds(5), &info);
+    ASSERT_TRUE(s);
+    EXPECT_FALSE(info.valid_data);
+    disposed += info.instance_state == efd::NOT_ALIVE_DISPOSED_INSTANCE_STATE;
+  }
+  EXPECT_EQ(disposed, 2);
+  EXPECT_EQ(publisher.write_failures(), 0u);
+}
+
 TEST(DdsSmoke, PositionCarriesPublishTimeAndMatchesAVolatileReader) {
   uint32_t domain = random_domain();
   PublisherOptions options;
@@ -210,6 +259,13 @@ TEST(DdsQos, BuiltInTable) {
   auto emcy = builtin_writer_qos(TopicKind::Emergency, false);
   EXPECT_EQ(emcy.reliability().kind, efd::RELIABLE_RELIABILITY_QOS);
   EXPECT_EQ(emcy.history().depth, kEmergencyDepth);
+  auto drive = builtin_writer_qos(TopicKind::DriveStatus, false);
+  EXPECT_EQ(drive.reliability().kind, efd::RELIABLE_RELIABILITY_QOS);
+  EXPECT_EQ(drive.durability().kind, efd::TRANSIENT_LOCAL_DURABILITY_QOS);
+  EXPECT_EQ(drive.history().depth, 1);
+  EXPECT_EQ(drive.resource_limits().max_instances, kMaxInstances);
+  EXPECT_EQ(drive.data_sharing().kind(), efd::OFF);
+  EXPECT_EQ(drive.reliable_writer_qos().times.nackSupressionDuration, position.reliable_writer_qos().times.nackSupressionDuration);
   EXPECT_LE(status.reliability().max_blocking_time.to_ns(), 1'000'000);
   // ROS 2 mode is unkeyed: one topic-wide history, deep enough for every axis.
   auto ros_status = builtin_writer_qos(TopicKind::AxisStatus, true);

@@ -15,6 +15,7 @@ TEST(Naming, PlainTopicsAreTheIdlStructNames) {
   EXPECT_EQ(topic_name(TopicKind::AxisPosition, plain), "AxisPosition");
   EXPECT_EQ(topic_name(TopicKind::NodeHealth, plain), "NodeHealth");
   EXPECT_EQ(topic_name(TopicKind::Emergency, plain), "Emergency");
+  EXPECT_EQ(topic_name(TopicKind::DriveStatus, plain), "DriveStatus");
 }
 
 TEST(Naming, PlainTypesAreTheIdlScopedNames) {
@@ -23,6 +24,7 @@ TEST(Naming, PlainTypesAreTheIdlScopedNames) {
   EXPECT_EQ(type_name(TopicKind::AxisPosition, plain), "stepnode::AxisPosition");
   EXPECT_EQ(type_name(TopicKind::NodeHealth, plain), "stepnode::NodeHealth");
   EXPECT_EQ(type_name(TopicKind::Emergency, plain), "stepnode::Emergency");
+  EXPECT_EQ(type_name(TopicKind::DriveStatus, plain), "stepnode::DriveStatus");
 }
 
 TEST(Naming, Ros2TopicsAreRtPrefixSnakeCase) {
@@ -31,6 +33,7 @@ TEST(Naming, Ros2TopicsAreRtPrefixSnakeCase) {
   EXPECT_EQ(topic_name(TopicKind::AxisPosition, ros2), "rt/stepnode/axis_position");
   EXPECT_EQ(topic_name(TopicKind::NodeHealth, ros2), "rt/stepnode/node_health");
   EXPECT_EQ(topic_name(TopicKind::Emergency, ros2), "rt/stepnode/emergency");
+  EXPECT_EQ(topic_name(TopicKind::DriveStatus, ros2), "rt/stepnode/drive_status");
   Naming nested{true, "line2/cell_4"};
   EXPECT_EQ(topic_name(TopicKind::AxisStatus, nested), "rt/line2/cell_4/axis_status");
 }
@@ -41,6 +44,7 @@ TEST(Naming, Ros2TypesAreMsgDdsUnderscore) {
   EXPECT_EQ(type_name(TopicKind::AxisPosition, ros2), "stepnode::msg::dds_::AxisPosition_");
   EXPECT_EQ(type_name(TopicKind::NodeHealth, ros2), "stepnode::msg::dds_::NodeHealth_");
   EXPECT_EQ(type_name(TopicKind::Emergency, ros2), "stepnode::msg::dds_::Emergency_");
+  EXPECT_EQ(type_name(TopicKind::DriveStatus, ros2), "stepnode::msg::dds_::DriveStatus_");
 }
 
 TEST(Naming, ProfileNames) {
@@ -48,6 +52,7 @@ TEST(Naming, ProfileNames) {
   EXPECT_EQ(profile_name(TopicKind::AxisPosition), "stepnode_axis_position");
   EXPECT_EQ(profile_name(TopicKind::NodeHealth), "stepnode_node_health");
   EXPECT_EQ(profile_name(TopicKind::Emergency), "stepnode_emergency");
+  EXPECT_EQ(profile_name(TopicKind::DriveStatus), "stepnode_drive_status");
 }
 
 TEST(Naming, Ros2PrefixRules) {

@@ -40,7 +40,8 @@ TEST(ShippedProfiles, StepbridgeXmlEqualsTheBuiltInWriterQos) {
               builtin.reliable_writer_qos().times.nackSupressionDuration);
     EXPECT_EQ(xml.resource_limits().max_samples_per_instance, builtin.resource_limits().max_samples_per_instance);
     // Every axis of every node fits (NodeHealth and Emergency: one instance per node).
-    EXPECT_GE(xml.resource_limits().max_instances, kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition ? kMaxInstances : 127);
+    const bool per_axis = kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition || kind == TopicKind::DriveStatus;
+    EXPECT_GE(xml.resource_limits().max_instances, per_axis ? kMaxInstances : 127);
   }
   delete_participant(participant);
 }

@@ -1,6 +1,7 @@
 #include "fake_node.hpp"
 
 #include "node/device_objects.hpp"
+#include "node/profiles/cia402/objects.hpp"
 #include "od/sdo_protocol.hpp"
 
 namespace stepnode::bridge::test {
@@ -40,10 +41,14 @@ FakeNode::FakeNode(FakeNodeOptions options)
   info.node_id = options_.id;
   info.device_name = options_.name;
   info.serial_number = 4242;
-  node::build_device_objects(od_, info, node::DeviceLayout{.axes = options_.axes});
+  info.product_code = options_.stepnode_product_code;
+  node::build_device_objects(od_, info,
+                             node::DeviceLayout{.axes = options_.axes, .horner = options_.horner, .hp = options_.hp,
+                                                .user = options_.user, .cia402 = options_.cia402});
   for (unsigned a = 0; a < options_.axes; ++a) {
     // The device dictionary may have the HP objects already (node/profiles/hp44714a); the
     // values asked for here are set either way.
+    if (!options_.horner && !options_.hp) continue;  // no 0x2n00 objects at all
     if (options_.pscale > 0 && od_.find(horner::obj::index(a, 0x11), 0))
       od_.put<double>(horner::obj::index(a, 0x11), 0, options_.pscale);
     else if (options_.pscale > 0)
@@ -101,6 +106,24 @@ void FakeNode::set_status(unsigned axis, uint16_t bits) {
 void FakeNode::set_position(unsigned axis, int32_t motor, int32_t encoder) {
   od_.put<int32_t>(horner::obj::index(axis, horner::obj::kMotorPosition), 0, motor);
   od_.put<int32_t>(horner::obj::index(axis, horner::obj::kEncoderPosition), 0, encoder);
+}
+
+void FakeNode::set_drive(unsigned axis, uint16_t statusword, int8_t mode_display) {
+  using namespace cia402::obj;
+  od_.put<uint16_t>(index(axis, kStatusword), 0, statusword);
+  od_.put<int8_t>(index(axis, kModesOfOperationDisplay), 0, mode_display);
+}
+
+void FakeNode::set_drive_position(unsigned axis, int32_t position, int32_t velocity) {
+  using namespace cia402::obj;
+  od_.put<int32_t>(index(axis, kPositionActual), 0, position);
+  od_.put<int32_t>(index(axis, kVelocityActual), 0, velocity);
+}
+
+void FakeNode::set_drive_fault(unsigned axis, uint16_t error_code, int32_t following_error) {
+  using namespace cia402::obj;
+  od_.put<uint16_t>(index(axis, kErrorCode), 0, error_code);
+  od_.put<int32_t>(index(axis, kFollowingErrorActual), 0, following_error);
 }
 
 void FakeNode::set_velocity(unsigned axis, int32_t velocity, uint8_t phase) {

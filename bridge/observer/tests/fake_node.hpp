@@ -21,6 +21,11 @@ struct FakeNodeOptions {
   bool stepnode = true;       // false: a third-party device (identity, name, no axes)
   double pscale = 0;          // >0: 0x2n11 PSCALE present with this value (all axes)
   bool hp_objects = false;    // 0x2n18 DONE? I8 and 0x2n19 HP error U8, mappable
+  // The stepnode's profiles (node/device_objects.hpp DeviceLayout). {.horner = false,
+  // .hp = false, .user = false, .cia402 = true} is a CiA 402 only device: no 0x2n00
+  // objects, TPDO1/2 {6041h, 6061h} / {6064h, 606Ch} of axis 1 at 0x180/0x280 + id.
+  bool horner = true, hp = true, user = true, cia402 = false;
+  uint32_t stepnode_product_code = 0x53544550;  // another: a CiA 402 drive of another vendor
   std::string name = "stepnode";
   // Third-party device only:
   uint32_t product_code = 0x00001234;
@@ -50,6 +55,10 @@ class FakeNode {
   void set_status(unsigned axis, uint16_t bits);
   void set_position(unsigned axis, int32_t motor, int32_t encoder);
   void set_velocity(unsigned axis, int32_t velocity, uint8_t phase);
+  // CiA 402 values (axis 0-based: objects at index + 0x800 * axis).
+  void set_drive(unsigned axis, uint16_t statusword, int8_t mode_display);
+  void set_drive_position(unsigned axis, int32_t position, int32_t velocity);
+  void set_drive_fault(unsigned axis, uint16_t error_code, int32_t following_error);
 
   // Misbehaviour of the SDO server.
   bool silent = false;          // requests are not answered (the client times out)

@@ -35,12 +35,13 @@ namespace {
 
 // A sink that does what a publisher's conversion would, without keeping anything.
 struct CountingSink : SampleSink {
-  uint64_t statuses = 0, positions = 0;
+  uint64_t statuses = 0, positions = 0, drives = 0;
   int64_t checksum = 0;
   void axis_status(const AxisStatusSample& s) override { ++statuses; checksum += s.status_bits; }
   void axis_position(const AxisPositionSample& s) override { ++positions; checksum += s.motor_position; }
   void node_health(const NodeHealthSample&) override {}
   void emergency(const EmergencySample&) override {}
+  void drive_status(const DriveStatusSample& s) override { ++drives; checksum += s.position_actual; }
   void dispose_axes(uint8_t, uint8_t) override {}
 };
 
@@ -53,9 +54,24 @@ TEST(HotPath, TpdosAreDecodedWithoutAllocation) {
     bus.add(*nodes.back());
     bus.boot(*nodes.back());
   }
+  // And two CiA 402 only nodes of two axes (TPDO1..4: statusword/mode, position/velocity).
+  for (uint8_t id = 11; id <= 12; ++id) {
+    nodes.push_back(std::make_unique<FakeNode>(
+        FakeNodeOptions{.id = id, .axes = 2, .horner = false, .hp = false, .user = false, .cia402 = true}));
+    bus.add(*nodes.back());
+    bus.boot(*nodes.back());
+  }
   bus.run_ms(100);
   std::vector<ObservedFrame> frames;
   for (auto& n : nodes) {
+    if (n->id() > 10) {
+      for (unsigned a = 0; a < 2; ++a) {
+        n->set_drive(a, 0x0637, 1);
+        n->set_drive_position(a, 500 * static_cast<int32_t>(a), 10);
+      }
+      for (unsigned k = 0; k < 4; ++k) frames.push_back(ObservedFrame{n->tpdo(k), 0, false, 0, 0});
+      continue;
+    }
     for (unsigned k = 0; k < 3; ++k) {
       n->set_status(0, static_cast<uint16_t>(0x0100 | k));
       n->set_position(0, 1000 * k, 999 * k);
@@ -85,6 +101,7 @@ TEST(HotPath, TpdosAreDecodedWithoutAllocation) {
   }
 
   const uint64_t snapshot_positions = sink.positions;  // discovery's own
+  const uint64_t snapshot_drives = sink.drives;
   constexpr int kRounds = 20'000;
   g_allocations = 0;
   g_counting = true;
@@ -99,6 +116,7 @@ TEST(HotPath, TpdosAreDecodedWithoutAllocation) {
   EXPECT_EQ(g_allocations.load(), 0u);
   EXPECT_TRUE(out.empty());
   EXPECT_EQ(sink.positions - snapshot_positions, uint64_t{kRounds} * 30);
+  EXPECT_EQ(sink.drives - snapshot_drives, uint64_t{kRounds} * 8) << "a DriveStatus per CiA 402 TPDO";
   const double seconds = std::chrono::duration<double>(end - start).count();
   const double rate = static_cast<double>(kRounds) * static_cast<double>(frames.size()) / seconds;
   std::printf("[ measured ] observer on_frame: %.0f frames/s (%zu frames x %d rounds, %.3f s)\n", rate,

@@ -12,12 +12,14 @@ struct RecordingSink : SampleSink {
   std::vector<AxisPositionSample> positions;
   std::vector<NodeHealthSample> healths;
   std::vector<EmergencySample> emergencies;
+  std::vector<DriveStatusSample> drives;
   std::vector<std::pair<uint8_t, uint8_t>> disposed;  // (node, axes)
 
   void axis_status(const AxisStatusSample& s) override { statuses.push_back(s); }
   void axis_position(const AxisPositionSample& s) override { positions.push_back(s); }
   void node_health(const NodeHealthSample& s) override { healths.push_back(s); }
   void emergency(const EmergencySample& s) override { emergencies.push_back(s); }
+  void drive_status(const DriveStatusSample& s) override { drives.push_back(s); }
   void dispose_axes(uint8_t node, uint8_t axes) override { disposed.emplace_back(node, axes); }
 
   void clear() {
@@ -25,6 +27,7 @@ struct RecordingSink : SampleSink {
     positions.clear();
     healths.clear();
     emergencies.clear();
+    drives.clear();
     disposed.clear();
   }
   const NodeHealthSample* last_health(uint8_t node) const {

@@ -139,6 +139,8 @@ TEST(DiscoveryPlan, FailedReadIsRepeatedAbsentMovesOn) {
   none.abort = od::SdoAbort::NoObject;
   none.aborted_by_server = true;
   p.on_result(none);
+  EXPECT_EQ(p.next(), (SdoRead{0x1000, 0}));
+  p.on_result(none);  // no device type: nothing says CiA 402
   EXPECT_EQ(p.next(), (SdoRead{0x1018, 1}));
   p.on_result(none);  // no identity at all: straight to the name
   EXPECT_EQ(p.next(), (SdoRead{0x1008, 0}));

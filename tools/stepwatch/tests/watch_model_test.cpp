@@ -34,6 +34,18 @@ namespace {
   return bridge::dds::to_idl(h);
 }
 
+::stepnode::DriveStatus drive(uint8_t node, uint8_t axis, uint16_t statusword, int8_t mode, int32_t position) {
+  bridge::DriveStatusSample d;
+  d.node = node;
+  d.axis = axis;
+  d.statusword_known = true;
+  d.statusword = statusword;
+  d.mode_display = mode;
+  d.position_actual = position;
+  d.velocity_actual = 300;
+  return bridge::dds::to_idl(d);
+}
+
 TEST(WatchModel, SnapshotIsNodesThenAxesInOrder) {
   WatchModel m;
   m.on_position(position(5, 2, 100, 50));
@@ -125,6 +137,33 @@ TEST(WatchModel, CsvRowsShareOneHeader) {
   // Every row has the header's 15 columns.
   for (const std::string& row : {csv_row(10, status(5, 1, 0)), csv_row(11, position(5, 2, 42, -7))})
     EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ','));
+}
+
+TEST(WatchModel, ACia402AxisShowsItsDriveState) {
+  WatchModel m;
+  m.on_health(health(6, bridge::NodeState::Operational));
+  m.on_drive(drive(6, 1, 0x0637, 1, 4000));  // Operation enabled, target reached
+  auto lines = m.snapshot();
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[1]["drive"]["state"], "Operation enabled");
+  EXPECT_EQ(lines[1]["drive"]["statusword"], 0x0637);
+  EXPECT_EQ(lines[1]["drive"]["target_reached"], true);
+  EXPECT_EQ(lines[1]["drive"]["position_actual"], 4000);
+  EXPECT_TRUE(lines[1]["status"].is_null());
+  std::string t = m.table();
+  EXPECT_NE(t.find("        1         4000            -       300     -      -  402: Operation enabled, pp target_reached"),
+            std::string::npos)
+      << t;
+  // A Horner axis has no "drive" key (the JSON as before).
+  m.on_status(status(6, 2, 0x0100));
+  EXPECT_FALSE(m.snapshot()[2].contains("drive"));
+  // Fault with its error code.
+  m.on_drive(drive(6, 1, 0x0218, 1, 4000));
+  EXPECT_EQ(drive_words(m.axes().begin()->second.drive.value()), "Fault, pp");
+  EXPECT_EQ(csv_row(15, drive(6, 1, 0x0637, 8, -5)),
+            "15,DriveStatus,6,1,0x0637,-5,,300,,,Operation enabled,0x0000,\"Operation enabled, csp target_reached\",0,0\n");
+  m.on_axis_disposed(6, 1);
+  EXPECT_EQ(m.axes().size(), 1u);
 }
 
 }  // namespace
