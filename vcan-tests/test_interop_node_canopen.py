@@ -1,10 +1,12 @@
 """Interoperability: a third-party CANopen master (node-canopen, npm "canopen", with the
 npm "socketcan" transport) drives a stepnode over vcan.
 
-The master is vcan-tests/interop/master.js; it prints one line per check and exits
-non-zero at the first failure with the frames of that check. Its npm packages are
-installed into vcan-tests/interop/node_modules by tools/setup (npm ci); without them
-this test fails instead of skipping, so CI cannot silently lose it.
+The master is vcan-tests/interop/master.js (CiA 301: NMT, SDO, PDO, SYNC, heartbeat, EMCY,
+EDS) and, for a node with `profiles = ["cia402"]`, vcan-tests/interop/cia402.js (the CiA 402
+state machine and profile position mode through node-canopen's SDO and PDO); each prints
+one line per check and exits non-zero at the first failure with the frames of that check.
+Their npm packages are installed into vcan-tests/interop/node_modules by tools/setup (npm
+ci); without them these tests fail instead of skipping, so CI cannot silently lose them.
 """
 
 from __future__ import annotations
@@ -66,3 +68,41 @@ def test_node_canopen_master_drives_stepnode(start_node, tmp_path):
     printed = subprocess.run([str(node.argv[0]), "--print-eds"], stdout=subprocess.PIPE, timeout=60,
                              check=True).stdout.decode(errors="replace")
     assert text == printed, "the EDS read from 0x1021 differs from `stepnode --print-eds`"
+
+
+CIA402_NODE_ID = 10
+
+
+def test_node_canopen_master_drives_a_cia402_axis(start_node, tmp_path):
+    """node-canopen drives axis 1 of a `profiles = ["cia402"]` node (vcan-tests/interop/cia402.js):
+    controlword 06h/07h/0Fh over SDO with 6041h read at each step and decoded with CiA
+    402's masks (and seen in the node's TPDO1 by node-canopen's PDO consumer), then two pp
+    moves with the set-point handshake, target reached and 6064h."""
+    modules = INTEROP / "node_modules"
+    if not (modules / "canopen").is_dir() or not (modules / "socketcan").is_dir():
+        pytest.fail(f"{modules} is missing (node-canopen and socketcan): run tools/setup "
+                    "(it runs `npm ci` in vcan-tests/interop)", pytrace=False)
+    config = tmp_path / "cia402.toml"
+    config.write_text('axes = 1\nprofiles = ["cia402"]\n')
+    node = start_node(CIA402_NODE_ID, ["--config", config])
+    argv = [node_binary(), str(INTEROP / "cia402.js"), "--iface", CHANNEL, "--node", str(CIA402_NODE_ID),
+            "--timeout", str(int(TIMEOUT))]
+    t0 = time.monotonic()
+    try:
+        proc = subprocess.run(argv, cwd=str(INTEROP), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, timeout=TIMEOUT + 30)
+    except subprocess.TimeoutExpired as e:
+        out = (e.stdout or b"").decode(errors="replace")
+        pytest.fail(f"cia402.js did not finish within {TIMEOUT + 30:.0f} s\n$ {' '.join(argv)}\n{out}\n"
+                    f"--- stepnode log ---\n{node.log()[-4000:]}", pytrace=False)
+    took = time.monotonic() - t0
+    out = proc.stdout.decode(errors="replace")
+    print(f"$ {' '.join(argv)}\n{out}(cia402.js: exit {proc.returncode} after {took:.1f} s)")
+    assert proc.returncode == 0, (
+        f"node-canopen CiA 402 session failed (exit {proc.returncode} after {took:.1f} s):\n{out}\n"
+        f"--- stepnode log ---\n{node.log()[-4000:]}")
+    assert node.alive, f"stepnode exited during the session (status {node.returncode})"
+    assert "all " in out and " checks passed" in out, out
+    passed = [line for line in out.splitlines() if line.startswith("ok   ")]
+    for step in ("-> Ready to switch on", "-> Switched on", "-> Operation enabled", "pp absolute", "pp relative"):
+        assert any(step in line for line in passed), f"no passed check about {step!r} in:\n{out}"

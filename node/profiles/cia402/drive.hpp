@@ -197,7 +197,8 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // velocity on a grid of its own (csv_running_). The cycle is measured from the SYNCs.
   std::optional<motion::Tick> last_sync_;
   motion::Tick cycle_ = 0;
-  bool cycle_measured_ = false;
+  motion::Tick odd_interval_ = 0;  // intervals that do not fit the cycle (a new period?)
+  int odd_intervals_ = 0;
   int64_t seg_from_ = 0, seg_to_ = 0;
   motion::Tick seg_start_ = 0, seg_ticks_ = 1;
   bool csv_running_ = false;

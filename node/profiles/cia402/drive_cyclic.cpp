@@ -26,14 +26,27 @@ int sign(int64_t v) { return v < 0 ? -1 : +1; }
 }  // namespace
 
 void Drive::measure_cycle(Tick arrival) {
-  // The cycle is the SYNC period as received (the master's 60C2h may not be written);
-  // 60C2h until two SYNCs are seen. An interval of twice the cycle or more is a missed
-  // SYNC, not a new period; jitter is averaged out.
+  // The cycle is the SYNC period as received (the master's 60C2h may not be written),
+  // starting from 60C2h. One odd interval changes nothing: two SYNCs read out of a queued
+  // socket arrive microseconds apart, a missed SYNC leaves a double one. An interval within
+  // half to twice the cycle is averaged in (jitter); eight in a row that agree with each
+  // other to a quarter but not with the cycle are a new period, and it is taken (a stalled
+  // process reads a few long intervals in a row: they are not a new period).
   if (cycle_ <= 0) cycle_ = std::max<Tick>(parameters_.interpolation_period, 1);
   if (last_sync_) {
     const Tick d = arrival - *last_sync_;
-    if (d > 0 && !cycle_measured_) cycle_ = d, cycle_measured_ = true;
-    else if (d > 0 && d < 2 * cycle_) cycle_ = (3 * cycle_ + d) / 4;
+    if (d > 0 && 2 * d >= cycle_ && d <= 2 * cycle_) {
+      cycle_ = (3 * cycle_ + d) / 4;
+      odd_intervals_ = 0;
+    } else if (d > 0) {
+      const bool agrees = odd_intervals_ > 0 && 4 * d >= 3 * odd_interval_ && 4 * d <= 5 * odd_interval_;
+      odd_interval_ = agrees ? (odd_interval_ + d) / 2 : d;
+      odd_intervals_ = agrees ? odd_intervals_ + 1 : 1;
+      if (odd_intervals_ >= 8) {
+        cycle_ = odd_interval_;
+        odd_intervals_ = 0;
+      }
+    }
   }
   last_sync_ = arrival;
 }

@@ -140,6 +140,22 @@ TEST_F(Cyclic, AMissedSyncHoldsTheLastSetPoint) {
   EXPECT_EQ(drive.position_actual(), 130);
 }
 
+// Two SYNCs read out of a queued socket microseconds apart must not become the cycle (the
+// axis would be capped at a few steps a SYNC for good), and a period other than 60C2h's is
+// taken after three SYNCs that agree.
+TEST_F(Cyclic, ASyncBurstIsNotTheCycleAndANewPeriodIsTaken) {
+  enable(Mode::CyclicSyncPosition);
+  const Tick cycle = kClockHz / 100;  // 10 ms SYNC; 60C2h left at its 1 ms
+  sync_to(cycle, 0);
+  sync_to(cycle + 50, 0);  // the burst
+  for (int k = 2; k <= 101; ++k) sync_to(cycle * k, 20 * (k - 1));
+  drive.advance(now += cycle);
+  EXPECT_EQ(drive.position_actual(), 2000);
+  // At the steady period each segment is spread over the whole cycle: 20 steps in 10 ms.
+  const size_t n = motor.steps.size();
+  EXPECT_NEAR(static_cast<double>(motor.steps[n - 1].first - motor.steps[n - 20].first), 19.0 * cycle / 20, cycle / 20);
+}
+
 TEST_F(Cyclic, CsvChangesTheVelocityAtEachSyncWithoutLosingAStep) {
   enable(Mode::CyclicSyncVelocity);
   const Tick cycle = kClockHz / 1000;
