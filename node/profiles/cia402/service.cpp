@@ -134,10 +134,6 @@ void Cia402Service::power_up(uint64_t) {
   }
 }
 
-void Cia402Service::advance(uint64_t) {
-  for (auto& d : drives_) d->advance(axes_.now());
-}
-
 void Cia402Service::master_lost(uint64_t) {
   for (unsigned a = 0; a < drives_.size(); ++a) {
     drives_[a]->connection_lost(dictionary_.get<int16_t>(index(a, kAbortConnectionOption), 0), axes_.now());

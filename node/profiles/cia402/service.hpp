@@ -25,7 +25,6 @@ class Cia402Service final : public Profile {
 
   void configure(uint64_t now_us) override;
   void power_up(uint64_t now_us) override;
-  void advance(uint64_t now_us) override;
   void publish() override;
   void master_lost(uint64_t now_us) override;
   void master_back(uint64_t now_us) override;
