@@ -139,9 +139,8 @@ def test_find_home_up(axis, master, simple):
 
 def test_find_home_on_the_encoder_marker_qualified_by_the_limit(axis, master):
     master.write_i32(NODE, 0x5000, 4, -5000)  # lower limit closer
-    master.write_u8(NODE, 0x2009, 1, 1)       # encoder quadrature
-    master.write_u8(NODE, 0x2009, 7, 1)       # origin: marker
-    master.write_u8(NODE, 0x2009, 8, 1)       # limit-switch qualified
+    master.write_u8(NODE, 0x2009, 1, 1)       # encoder QUAD: with the SPM30 rules (the default
+                                              # model) the marker homes, qualified by the limit
     master.write_i32(NODE, 0x5001, 3, 300)    # markers at 300 + k*2000, 4 steps wide
     axis.command("home_down", 0)
     seen = axis.run_until_stopped(60)
@@ -221,8 +220,9 @@ def test_emergency_stop_input(axis, master):
 
 
 def test_stall_injected(axis, master):
-    master.write_u8(NODE, 0x2009, 1, 1)       # quadrature encoder, 2000 steps = 2000 counts
-    master.write_u8(NODE, 0x2009, 5, 1)       # stall detection
+    master.write_u8(NODE, 0x2009, 1, 1)       # quadrature encoder, 500 lines decoded x4:
+    master.write_u8(NODE, 0x2009, 12, 4)      # 2000 steps = 2000 counts
+    master.write_u8(NODE, 0x2009, 4, 20)      # a tolerance: SPM30 stall detection (5.4)
     master.write_u8(NODE, 0x5002, 3, 1)       # jam above 800
     master.write_i32(NODE, 0x5002, 4, 800)
     axis.command("rel", 5000)

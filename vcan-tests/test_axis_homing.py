@@ -67,14 +67,25 @@ def test_axis_find_home_switch(link, ax, master, direction, method):
         assert near and all(abs(p - origin) <= 20 for p in near), near
 
 
-@pytest.mark.parametrize("qualified", [False, True], ids=["marker", "marker-limit-qualified"])
+# (module model 0x2009:11, origin source marker 0x2009:7, limit qualified 0x2009:8)
+MARKER_HOMING = {"stp100-marker": (1, 1, 0), "stp100-marker-limit-qualified": (1, 1, 1),
+                 "spm30-quad": (0, 0, 0)}
+
+
+@pytest.mark.parametrize("setup", list(MARKER_HOMING))
 @pytest.mark.parametrize("direction", ["up", "down"])
-def test_axis_find_home_on_the_encoder_marker(link, ax, master, direction, qualified):
-    # Wiring: a quadrature encoder, 2000 steps = 500 lines x4, markers 4 steps wide at
-    # 300 + k*2000; limits at -4000 and 4600 (closer than the default +-100000).
+def test_axis_find_home_on_the_encoder_marker(link, ax, master, direction, setup):
+    # Wiring: a quadrature encoder, 2000 steps = 500 lines decoded x4, markers 4 steps wide
+    # at 300 + k*2000; limits at -4000 and 4600 (closer than the default +-100000). The
+    # STP100 takes the marker and the limit qualification as options (3.2.3); the SPM30 does
+    # both with QUAD and nothing else (4 FIND HOME step 3).
+    model, marker, qualified = MARKER_HOMING[setup]
+    qualified = qualified or model == 0
+    master.write_u8(NODE, 0x2009, 11, model)
     master.write_u8(NODE, 0x2009, 1, 1)              # encoder quadrature
-    master.write_u8(NODE, 0x2009, 7, 1)              # origin source: the marker (STP100 3.2.3)
-    master.write_u8(NODE, 0x2009, 8, int(qualified))  # limit-switch qualified find origin
+    master.write_u8(NODE, 0x2009, 12, 4)
+    master.write_u8(NODE, 0x2009, 7, marker)         # origin source: the marker (STP100 3.2.3)
+    master.write_u8(NODE, 0x2009, 8, int(qualified and model == 1))  # limit-switch qualified
     master.write_i32(NODE, SIM_ENCODER, 3, 300)
     master.write_i32(NODE, SIM_SWITCHES, 4, LOWER_AT)
     master.write_i32(NODE, SIM_SWITCHES, 6, UPPER_AT)

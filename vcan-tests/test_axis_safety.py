@@ -102,13 +102,23 @@ def test_axis_emergency_stop_input(link, ax, master):
     assert ax.mechanical() == stopped + 100
 
 
-@pytest.mark.parametrize("detection", [True, False], ids=["stall-detection", "no-stall-detection"])
-def test_axis_stalled_motor(link, ax, master, detection):
-    # Quadrature encoder, 2000 steps/rev and 500 lines x4 = 2000 counts: multiplier 1, divisor 1.
+# (module model 0x2009:11, tolerance 0x2009:4, STP100 checkbox 0x2009:5, stall expected)
+STALL_RULES = [(0, 10, 0, True), (0, 0, 1, False), (1, 0, 1, True), (1, 10, 0, False)]
+
+
+@pytest.mark.parametrize("model,tolerance,checkbox,detection", STALL_RULES,
+                         ids=["spm30-tolerance", "spm30-no-tolerance", "stp100-checkbox", "stp100-no-checkbox"])
+def test_axis_stalled_motor(link, ax, master, model, tolerance, checkbox, detection):
+    # SPM30 5.4: stall detection whenever the tolerance is non-zero; STP100 6.3.3: when its
+    # "Enable Stall Detection" is checked. Quadrature encoder, 2000 steps/rev and 500 lines
+    # decoded x4 (0x2009:12) = 2000 counts: multiplier 1, divisor 1.
+    master.write_u8(NODE, 0x2009, 11, model)
     master.write_u8(NODE, 0x2009, 1, 1)
+    master.write_u8(NODE, 0x2009, 12, 4)
     master.write_u8(NODE, 0x2009, 2, 1)
     master.write_u8(NODE, 0x2009, 3, 1)
-    master.write_u8(NODE, 0x2009, 5, int(detection))  # STP100 6.3.3
+    master.write_u8(NODE, 0x2009, 4, tolerance)
+    master.write_u8(NODE, 0x2009, 5, checkbox)
     master.write_u8(NODE, SIM_FAULTS, 3, 1)            # the load jams above 800
     master.write_i32(NODE, SIM_FAULTS, 4, 800)
     set_position(ax, 0)

@@ -52,10 +52,10 @@ def test_a_master_remapping_a_tpdo_mid_run_is_followed(master, start_node, start
     start_bridge()
     link = boot(master, start_node)
     ax = link.axes[1]
-    # A quadrature encoder with 250 lines on 2000 steps/rev counts half the motor's steps,
-    # so motor and encoder positions differ and a mix-up shows.
+    # A quadrature encoder with 1000 lines (counted once each) on 2000 steps/rev counts half
+    # the motor's steps, so motor and encoder positions differ and a mix-up shows.
     master.write_u8(NODE, 0x2009, 1, 1)
-    master.write_i32(NODE, 0x5001, 2, 250)
+    master.write_i32(NODE, 0x5001, 2, 1000)
     wait_discovered(cyclone)
     clear_and_profile(ax, FAST)
     set_position(ax, 0)

@@ -32,8 +32,26 @@ Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop)
   power_up(0);
 }
 
+Axis::Rules Axis::rules_of(const AxisConfig& c) {
+  bool encoder = c.encoder != EncoderKind::None;
+  if (c.module == AxisConfig::Module::Stp100)
+    return Rules{.stall_detection = encoder && c.stall_detection,
+                 .invalid_at_tolerance = false,
+                 .marker_origin = c.origin_source == AxisConfig::OriginSource::Marker,
+                 .limit_qualified = c.limit_qualified_home};
+  // SPM30 5.4: "when ENCODER TOL is non-zero, the SPM30 uses the encoder feedback pulses to
+  // verify motor velocity". SPM30 4 FIND HOME: with QUAD the marker is axis 1's home input
+  // and step 3 stops on the end limit. The STP100 options still apply on top.
+  bool quad = c.encoder == EncoderKind::Quadrature;
+  return Rules{.stall_detection = encoder && c.encoder_tolerance > 0,
+               .invalid_at_tolerance = true,
+               .marker_origin = quad || c.origin_source == AxisConfig::OriginSource::Marker,
+               .limit_qualified = quad || c.limit_qualified_home};
+}
+
 void Axis::set_config(const AxisConfig& config) {
   config_ = config;
+  rules_ = rules_of(config_);
   // Another front end's steps matter to the module only for the position check.
   core_.watch_steps(*this, config_.encoder != EncoderKind::None && config_.encoder_tolerance > 0);
 }
@@ -53,13 +71,24 @@ void Axis::power_up(Tick now) {
 }
 
 bool Axis::origin_active() const {
-  return config_.origin_source == AxisConfig::OriginSource::Marker ? motor().marker() : motor().home();
+  // The marker is wired to axis 1's home input (SPM30 4 FIND HOME, 5.1); the other motors
+  // of a multiplexed axis keep their home switches.
+  bool marker = rules_.marker_origin && core_.selected() == 0;
+  return marker ? motor().marker() : motor().home();
+}
+
+int64_t Axis::encoder_counts() const {
+  int64_t counts = core_.motor(0).encoder_count();
+  if (config_.encoder == EncoderKind::UpDown) return counts;
+  // A quadrature port counts every edge of A and B (4 per line); the module counts lines,
+  // or 2 / 4 per line when its decoding doubles or quadruples the resolution.
+  return floor_div(counts * std::clamp<int64_t>(config_.quadrature_decoding, 1, 4), 4);
 }
 
 int32_t Axis::encoder_position() const {
   // The encoder belongs to the first motor (SPM30 3.3.2: axis 1's, whatever is selected).
   if (config_.encoder == EncoderKind::None) return core_.selected() == 0 ? core_.position() : saved_[0].position;
-  int64_t steps = floor_div(core_.motor(0).encoder_count() * config_.encoder_multiplier,
+  int64_t steps = floor_div(encoder_counts() * config_.encoder_multiplier,
                             std::max<int64_t>(config_.encoder_divisor, 1));
   return static_cast<int32_t>(encoder_offset_ + steps);
 }
@@ -115,8 +144,10 @@ std::optional<RampSpec> Axis::ramp_from_words(Tick now, bool index_decel) {
   try {
     uint16_t decel = words_.deceleration_ms;
     if (index_decel && words_.index_deceleration_ms != 0) decel = words_.index_deceleration_ms;
-    return horner_ramp(words_.velocity_divisor, words_.base_velocity, words_.running_velocity,
-                       words_.acceleration_ms, decel);
+    RampSpec r = horner_ramp(words_.velocity_divisor, words_.base_velocity, words_.running_velocity,
+                             words_.acceleration_ms, decel);
+    if (config_.stpcalc_peak_short_moves) r.short_move = RampSpec::ShortMove::StpcalcPeak;
+    return r;
   } catch (const std::invalid_argument&) {
     latch(status::kIllegalMove, now);  // the words do not describe a possible move
     return std::nullopt;
@@ -130,15 +161,14 @@ bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64
     job_ = Job::None;  // another front end's job: the command filter keeps this from happening
     return false;
   }
-  stall_window_steps_ = 0;
-  stall_window_encoder_start_ = encoder_position();
+  restart_stall_windows(direction);
   return true;
 }
 
 void Axis::start_base_run(int direction, Tick now) {
   RampSpec base = move_ramp_;
   base.run_level = base.base_level;  // constant base velocity, no ramp
-  base.horner_triangle_rule = false;
+  base.short_move = RampSpec::ShortMove::Meet;
   start_motion(base, direction, std::nullopt, now);
 }
 
@@ -304,9 +334,10 @@ void Axis::write_commands(uint16_t bits, Tick now) {
   if (!config_.indexed_moves) candidates &= static_cast<uint16_t>(~command::kMoveIndexed);  // future use
   if (core_.motors() < 2) candidates &= static_cast<uint16_t>(~(command::kSelectAxis2 | command::kSelectAxis3));
   if (core_.motors() < 3) candidates &= static_cast<uint16_t>(~command::kSelectAxis3);
-  // While an error is latched only Clear Errors is obeyed; while moving (any front end's
-  // job) only the stops.
-  if (errors_) candidates &= command::kClearErrors;
+  // While an error is latched only Clear Errors and the two stops are obeyed (SPM30 4: their
+  // "Status Bits Required: None"; a lost master's ramp, or another front end's job, can
+  // still be stopped); while moving (any front end's job) only the stops.
+  if (errors_) candidates &= command::kClearErrors | command::kDecelStop | command::kImmediateStop;
   else if (moving())
     candidates &= command::kDecelStop | command::kImmediateStop;
   if (candidates) {
@@ -334,22 +365,45 @@ void Axis::master_lost(Tick now) {
 
 void Axis::check_position_valid() {
   if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 || core_.selected() != 0) return;
-  if (std::llabs(int64_t{core_.position()} - encoder_position()) >= config_.encoder_tolerance)
-    position_valid_ = false;  // SPM30 5.4: when the difference reaches the tolerance
+  int64_t difference = std::llabs(int64_t{core_.position()} - encoder_position());
+  // SPM30 5.4: "reaches encoder tolerance"; STP100 6.3.2: "exceeds the configured Encoder
+  // Tolerance value".
+  if (rules_.invalid_at_tolerance ? difference >= config_.encoder_tolerance
+                                  : difference > config_.encoder_tolerance)
+    position_valid_ = false;
+}
+
+void Axis::restart_stall_windows(int direction) {
+  int64_t counts = config_.encoder == EncoderKind::None ? 0 : encoder_counts();
+  stall_short_ = stall_long_ = StallWindow{0, counts};
+  stall_direction_ = direction;
+}
+
+bool Axis::stalled_over(StallWindow& window, int64_t counts_per_window) {
+  // The window spans the commanded steps worth `counts_per_window` encoder counts.
+  int64_t mlt = config_.encoder_multiplier, div = std::max<int64_t>(config_.encoder_divisor, 1);
+  if (++window.steps * div < counts_per_window * mlt) return false;
+  int64_t counts = encoder_counts();
+  int64_t measured = std::llabs(counts - window.counts_start);
+  int64_t commanded_steps = window.steps;
+  window = StallWindow{0, counts};
+  // STP100 6.3.3: a stall when the measured velocity is less than 10 % of the theoretical
+  // one, here over the same commanded steps: measured counts < 10 % of steps * DIV / MLT.
+  // The count difference of a moving encoder is at most one count short of its true
+  // motion, so the test is on measured + 1: a motor at 10 % or more is never a stall.
+  return (measured + 1) * 10 * mlt < commanded_steps * div;
 }
 
 void Axis::check_stall(const Step& step) {
-  if (!config_.stall_detection || config_.encoder == EncoderKind::None || core_.selected() != 0) return;
-  // Over a window of commanded steps, the encoder must show at least 10% of the motion
-  // (STP100 6.3.3). The window spans several encoder counts, so resolution is no issue.
-  int64_t steps_per_count = (config_.encoder_multiplier + config_.encoder_divisor - 1) /
-                            std::max<int64_t>(config_.encoder_divisor, 1);
-  int64_t window = std::max<int64_t>(32, 20 * steps_per_count);
-  if (++stall_window_steps_ < window) return;
-  int64_t moved = std::llabs(int64_t{encoder_position()} - stall_window_encoder_start_);
-  stall_window_steps_ = 0;
-  stall_window_encoder_start_ = encoder_position();
-  if (moved * 10 < window) latch(status::kMotorStalled, step.time);
+  if (!rules_.stall_detection || core_.selected() != 0) return;
+  // A reversal (FIND HOME's runs at base velocity) begins new windows: net motion across
+  // it says nothing about velocity.
+  if (step.direction != stall_direction_) restart_stall_windows(step.direction);
+  // 20 counts: a jammed encoder (no count at all) is caught within them; 1000 counts: a
+  // slipping motor is judged to within 0.1 % of the threshold.
+  bool stalled = stalled_over(stall_short_, 20);
+  stalled = stalled_over(stall_long_, 1000) || stalled;
+  if (stalled) latch(status::kMotorStalled, step.time);
 }
 
 void Axis::step_taken(const Step& step) {
@@ -382,13 +436,13 @@ void Axis::after_step(const Step& step) {
   Tick t = step.time;
   if (job_ == Job::Move) ++move_done_steps_;
   if (step.direction < 0 && motor().lower_limit()) {
-    if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
+    if (job_ == Job::Home && home_stage_ == HomeStage::Seek && limit_qualified_home()) {
       return home_event(t, /*at_limit=*/true);
     }
     return latch(status::kLowerLimit, t);
   }
   if (step.direction > 0 && motor().upper_limit()) {
-    if (job_ == Job::Home && home_stage_ == HomeStage::Seek && config_.limit_qualified_home) {
+    if (job_ == Job::Home && home_stage_ == HomeStage::Seek && limit_qualified_home()) {
       return home_event(t, /*at_limit=*/true);
     }
     return latch(status::kUpperLimit, t);

@@ -17,10 +17,18 @@
 
 namespace stepnode::motion {
 
-// Where the two manuals differ, both behaviours are settings (the default is the SPM30).
+// Where the two manuals differ, the module model chooses (the default is the SPM30); the
+// STP100's own options are settings.
 struct AxisConfig {
+  // SPM30: stall detection on whenever the tolerance is non-zero (5.4), %I9 off when the
+  // difference reaches the tolerance (5.4), QUAD homes on the marker qualified by the end
+  // limit (4 FIND HOME). STP100: stall detection is its own checkbox (6.3.3), %I9 off when
+  // the difference exceeds the tolerance (6.3.2), origin source and limit qualification
+  // are options (3.2.3).
+  enum class Module { Spm30, Stp100 };
   enum class HomeMethod { Normal, Simple };          // STP113 C1.2.1 / STP100 3.2.3
   enum class OriginSource { HomeSwitch, Marker };    // STP100 3.2.3 (SPM30: marker = QUAD)
+  Module module = Module::Spm30;
   HomeMethod home_method = HomeMethod::Normal;
   OriginSource origin_source = OriginSource::HomeSwitch;
   bool limit_qualified_home = false;  // STP100 3.2.3; SPM30 does this with encoder QUAD
@@ -28,9 +36,15 @@ struct AxisConfig {
   int64_t encoder_multiplier = 1;  // 1..255
   int64_t encoder_divisor = 1;     // 1..16
   int64_t encoder_tolerance = 0;   // 0..255, 0 = no position validation
-  bool stall_detection = false;    // STP100 6.3.3 (SPM30: on when the tolerance is set)
+  // Quadrature counts per encoder line: 1 as the ratio tables count a 1000-line encoder
+  // (SPM30 5.3, STP100 Table 6.1), or 2 / 4 ("doubled or quadrupled", SPM30 5.1, STP100 6.2.1).
+  int64_t quadrature_decoding = 1;
+  bool stall_detection = false;    // STP100 6.3.3 "Enable Stall Detection" (STP100 model only)
   bool indexed_moves = true;       // %Q11 is Move Indexed (STP113, STP100)
   bool limit_started_moves = false;  // STP100 5.3.4: a move toward an active limit waits
+  // A move too short for the running velocity cruises at STPCALC's peak (B1.3.6) instead of
+  // turning at halfway (SPM30 3.4.5): STPCALC's figures rather than the module's motion.
+  bool stpcalc_peak_short_moves = false;
 };
 
 // What the axis reports as it happens (status changes go out on the bus at once).
@@ -103,6 +117,17 @@ class Axis final : public FrontEnd, public AxisListener {
   MotorPort& motor() { return core_.motor(); }
   const MotorPort& motor() const { return core_.motor(); }
   bool origin_active() const;
+  // The rules the module model and the settings give (set_config).
+  struct Rules {
+    bool stall_detection = false;     // SPM30 5.4 / STP100 6.3.3
+    bool invalid_at_tolerance = true;  // SPM30 5.4 "reaches"; STP100 6.3.2 "exceeds"
+    bool marker_origin = false;       // STP100 3.2.3 option; SPM30 QUAD on axis 1
+    bool limit_qualified = false;     // STP100 3.2.3 option; SPM30 QUAD on axis 1
+  };
+  static Rules rules_of(const AxisConfig& config);
+  // Axis 1's encoder counts as the module decodes them (the motor port gives edges).
+  int64_t encoder_counts() const;
+  bool limit_qualified_home() const { return rules_.limit_qualified && core_.selected() == 0; }
   void execute(uint16_t command_bit, Tick now);
   // The commands (SPM30 section 4), one each; FIND HOME is node/motion/axis_homing.cpp.
   void immediate_stop(Tick now);
@@ -156,9 +181,17 @@ class Axis final : public FrontEnd, public AxisListener {
   HomeStage home_stage_ = HomeStage::Seek;
   std::optional<Tick> origin_inactive_since_;
   bool origin_seen_inactive_ = false;
-  // Stall detection window.
-  int64_t stall_window_steps_ = 0;
-  int64_t stall_window_encoder_start_ = 0;
+  Rules rules_;
+  // Stall detection (STP100 6.3.3): over a short window a jam shows at once, over a long
+  // one a slipping motor is measured to within 0.1 % of the 10 % threshold.
+  struct StallWindow {
+    int64_t steps = 0;          // commanded steps since the window began
+    int64_t counts_start = 0;   // encoder counts when it began
+  };
+  StallWindow stall_short_, stall_long_;
+  int stall_direction_ = 0;
+  void restart_stall_windows(int direction);
+  bool stalled_over(StallWindow& window, int64_t counts_per_window);
 
   // Per-motor memory for SPM30 axis selection (3.2 SELECT AXIS).
   struct Saved {

@@ -27,7 +27,7 @@ void Axis::find_home(int direction, Tick now) {
   // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
   // the limit is already reached and the search goes on from step 4.
   if (direction > 0 ? motor().upper_limit() : motor().lower_limit()) {
-    if (!config_.limit_qualified_home)
+    if (!limit_qualified_home())
       return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
     job_direction_ = direction;
     core_.claim(*this, now);
@@ -43,7 +43,7 @@ void Axis::home_event(Tick now, bool at_limit) {
     case HomeStage::Seek:
       // Step 3: stop at once on the origin, or (limit-switch-qualified, STP100 3.2.3) on
       // the end limit of the direction of travel.
-      if (config_.limit_qualified_home ? !at_limit : !origin) return;
+      if (limit_qualified_home() ? !at_limit : !origin) return;
       core_.halt_motion(now);
       break;
     case HomeStage::BackToOrigin:

@@ -76,7 +76,7 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * per_hz);
   // ... but never faster than the run rate: PROFILE FREQ 10 10 500 crept at 31.6 Hz.
   r.min_creep_level = std::min(std::max<int64_t>({int64_t{1}, r.base_level, one_step}), std::max<int64_t>(1, r.run_level));
-  r.horner_triangle_rule = false;
+  r.short_move = RampSpec::ShortMove::Meet;
   // The engine's invariants (checked in the sanitizer build): every rate the PROFILE and
   // SUSTAIN checks accept gives a positive step size far from int64 overflow.
   assert(r.phase_per_step > 0 && r.phase_per_step < (int64_t{1} << 52));

@@ -38,7 +38,8 @@ class MotorPort {
   virtual bool upper_limit() const = 0;
   virtual bool index() const = 0;
   virtual bool marker() const = 0;
-  // Encoder counts (0 without an encoder).
+  // Encoder counts (0 without an encoder): for a quadrature encoder every edge of A and B,
+  // 4 per line, as a quadrature decoder counts them at its finest.
   virtual int64_t encoder_count() const = 0;
 };
 

@@ -37,11 +37,22 @@ __int128 RampSpec::decel_phase(int64_t level) const {
 }
 
 int64_t RampSpec::peak_level_for(int64_t distance) const {
-  if (!horner_triangle_rule) return run_level;
+  const __int128 total = static_cast<__int128>(distance) * phase_per_step;
+  if (short_move == ShortMove::Meet) return run_level;
+  if (short_move == ShortMove::Halfway) {
+    // The highest level whose ramp up and ramp down together fit the move (both grow with
+    // the level): the move turns on it, having cruised less than one level's pulses.
+    if (accel_phase(run_level) + decel_phase(run_level) <= total) return run_level;
+    int64_t fits = base_level, too_high = run_level;
+    while (too_high - fits > 1) {
+      int64_t mid = fits + (too_high - fits) / 2;
+      (accel_phase(mid) + decel_phase(mid) <= total ? fits : too_high) = mid;
+    }
+    return fits;
+  }
   // STPCALC B1.3.8: the move is triangular when Pulse_A + Pulse_D > total; the peak is
   // base + R_T * (run - base) (B1.3.6 with Time_A scaled by R_T), R_T = total/(A+D).
   __int128 both = accel_phase(run_level) + decel_phase(run_level);  // in phase units
-  __int128 total = static_cast<__int128>(distance) * phase_per_step;
   if (total >= both) return run_level;
   int64_t rise = static_cast<int64_t>(total * (run_level - base_level) / both);
   return base_level + rise;
@@ -79,7 +90,6 @@ RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t le
   const auto one_step = static_cast<int64_t>(std::llround(std::sqrt(2.0 * static_cast<double>(decel)) *
                                                           static_cast<double>(levels_per_hz)));
   r.min_creep_level = std::clamp<int64_t>(one_step, 1, r.run_level);
-  r.horner_triangle_rule = false;
   return r;
 }
 
@@ -108,7 +118,7 @@ RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t
   r.run_level = aq5;
   r.accel_ticks_per_level = z(aq6);
   r.decel_ticks_per_level = z(aq7);
-  r.horner_triangle_rule = true;
+  r.short_move = RampSpec::ShortMove::Halfway;  // SPM30 3.4.5 (StpcalcPeak is the axis' option)
   return r;
 }
 

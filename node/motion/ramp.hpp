@@ -22,8 +22,8 @@ struct RampSpec {
   int64_t run_level = 2;           // cruise velocity
   Rational accel_ticks_per_level;  // Z_A
   Rational decel_ticks_per_level;  // Z_D
-  // The highest level a move of `distance` steps may reach. Horner: STPCALC's peak
-  // velocity for triangular moves (B1.3.6), so the engine never exceeds it.
+  // The highest level a move of `distance` steps may reach: the run level, or with
+  // ShortMove::StpcalcPeak STPCALC's peak velocity for triangular moves (B1.3.6).
   int64_t peak_level_for(int64_t distance) const;
 
   double velocity_of(int64_t level) const {
@@ -34,8 +34,16 @@ struct RampSpec {
   __int128 accel_phase(int64_t level) const;
   __int128 decel_phase(int64_t level) const;
 
-  // Set for Horner register ramps: the STPCALC triangular rule applies.
-  bool horner_triangle_rule = false;
+  // How a move too short to reach the run level turns. Meet: after the step at which the
+  // deceleration the rest of the move needs begins (the profile ramps). Halfway: the peak is
+  // the highest level whose ramps up and down fit the move, so the ramps meet on it; with
+  // equal ramps that is "halfway to its relative target position" (SPM30 3.4.5, 4 MOVE;
+  // STP100 1.7, 5.3.4). (A literal halfway with AQ7 < AQ6 would keep trapezoidal moves of
+  // STPCALC B1.3 from their running velocity: the acceleration may need more than half the
+  // pulses.) StpcalcPeak: accelerate to STPCALC's peak velocity (B1.3.6) and cruise there
+  // until the deceleration point (an option: STPCALC's figures, not the module's motion).
+  enum class ShortMove : uint8_t { Meet, Halfway, StpcalcPeak };
+  ShortMove short_move = ShortMove::Meet;
   // The slowest level a move creeps at when a ramp ends short of its target (the phase
   // accumulator may leave a step over). 1 keeps a 0 Hz base moving; the HP channel, whose
   // minimum may be 0 Hz, sets the velocity one step from standstill reaches.

@@ -164,7 +164,7 @@ bool StepGenerator::next(Step& out) {
       marks_.end = t_;
       if (marks_.decel_end < 0) marks_.decel_end = t_;
     } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
-      // A ramp without a peak cap may have to turn before reaching the running velocity.
+      // A move too short for the running velocity turns where the ramps meet.
       begin_decel();
     }
     return true;

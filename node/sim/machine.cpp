@@ -18,6 +18,7 @@ void AxisMachine::step(motion::Tick time, int direction) {
   if (trace_) [[unlikely]] record(time, direction);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
+  if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping
   int64_t next = position_ + (direction >= 0 ? 1 : -1);
   if (config_.stall_above && next > *config_.stall_above) return;  // jammed
   if (config_.stall_below && next < *config_.stall_below) return;

@@ -33,6 +33,7 @@ struct AxisMachineConfig {
   // Faults.
   std::optional<int64_t> stall_below, stall_above;  // the motor cannot pass these positions
   uint32_t miss_every = 0;               // every n-th step is lost (0 = none)
+  uint32_t move_every = 0;               // a slipping motor: only every n-th step moves it
 };
 
 // One step pulse as the drive received it: its tick and direction (+1 / -1).
@@ -63,8 +64,8 @@ class AxisMachine : public motion::MotorPort {
   bool lower_limit() const override { return config_.lower_limit && position_ <= *config_.lower_limit; }
   bool upper_limit() const override { return config_.upper_limit && position_ >= *config_.upper_limit; }
   bool marker() const override;
-  // Encoder counts: 4 per line for quadrature (x4 decoding), 1 per line for up/down;
-  // 0 without an encoder.
+  // Encoder counts as the input hardware sees them: every edge of A and B for quadrature
+  // (4 per line; the module decides how many it counts), 1 per line for up/down; 0 without.
   int64_t encoder_count() const override;
   int64_t encoder_counts_per_rev() const;
   uint64_t pulses_received() const { return pulses_; }

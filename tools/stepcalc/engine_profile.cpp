@@ -64,8 +64,9 @@ Curve engine_staircase(const motion::RampSpec& ramp, const motion::StepGenerator
   return c;
 }
 
-EngineProfile run_engine(const motion::StpcalcInput& in) {
+EngineProfile run_engine(const motion::StpcalcInput& in, bool stpcalc_peak) {
   motion::RampSpec ramp = motion::horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);
+  if (stpcalc_peak) ramp.short_move = motion::RampSpec::ShortMove::StpcalcPeak;
   motion::StepGenerator g;
   g.start(ramp, 0, +1, in.total ? std::optional<int64_t>(*in.total) : std::nullopt);
   EngineProfile p;

@@ -1,6 +1,6 @@
 // stepcalc: the Horner STPCALC calculator (SPM30 Appendix B) with the engine's exact values
 // for the same move beside every figure.
-//   stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--plot FILE.svg|FILE.png]
+//   stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--stpcalc-peak] [--plot FILE.svg|FILE.png]
 // TOTAL is 0..16777215 or '-' (a move without destination). Bad input: exit 2, one line.
 #include <CLI/CLI.hpp>
 
@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
       "engine's exact values for the same move beside STPCALC's."};
   std::string total;
   std::vector<std::string> aq;
-  bool json = false;
+  bool json = false, stpcalc_peak = false;
   std::string plot;
   app.add_option("TOTAL", total, "total pulses 0..16777215, or - for a move without destination (jog)")->required();
   app.add_option("AQ3_AQ7", aq,
@@ -40,6 +40,9 @@ int main(int argc, char** argv) {
       ->required()
       ->expected(5);
   app.add_flag("--json", json, "print one JSON object: STPCALC's values and an \"engine\" object with the same keys");
+  app.add_flag("--stpcalc-peak", stpcalc_peak,
+               "the engine as an axis with 0x2n09:13 set: a short move cruises at STPCALC's peak velocity\n"
+               "instead of turning where its ramps meet (halfway with equal ramps, SPM30 3.4.5)");
   app.add_option("--plot", plot,
                  "draw velocity against time, STPCALC's and the engine's: FILE.svg, or FILE.png (rsvg-convert)");
   try {
@@ -55,7 +58,7 @@ int main(int argc, char** argv) {
   }
   tools::ProfileReport report;
   try {
-    report = tools::make_report(tools::parse_input(total, aq));
+    report = tools::make_report(tools::parse_input(total, aq), stpcalc_peak);
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "stepcalc: %s\n", e.what());
     return 2;

@@ -42,13 +42,13 @@ nlohmann::json to_json(const ProfileValues& v) {
 
 }  // namespace
 
-ProfileReport make_report(const motion::StpcalcInput& input) {
+ProfileReport make_report(const motion::StpcalcInput& input, bool stpcalc_peak) {
   motion::StpcalcResult s = motion::stpcalc(input);  // validates every input
   ProfileReport r;
   r.input = input;
   r.triangular = s.triangular;
   r.stpcalc = from_stpcalc(s);
-  EngineProfile e = run_engine(input);
+  EngineProfile e = run_engine(input, stpcalc_peak);
   r.engine = e.values;
   r.engine_curve = std::move(e.staircase);
   r.ideal_curve = ideal_curve(r.stpcalc);

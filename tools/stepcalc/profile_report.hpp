@@ -16,8 +16,9 @@ struct ProfileReport {
   Curve engine_curve;  // the engine's quantised staircase, every ramp interval
 };
 
-// Throws std::invalid_argument naming the input and its legal range.
-ProfileReport make_report(const motion::StpcalcInput& input);
+// Throws std::invalid_argument naming the input and its legal range. `stpcalc_peak`: the
+// engine side with the axis option 0x2n09:13 (run_engine).
+ProfileReport make_report(const motion::StpcalcInput& input, bool stpcalc_peak = false);
 
 // Every B1.3 value in STPCALC's words, STPCALC's value and the engine's beside it.
 std::string report_text(const ProfileReport& r);

@@ -471,6 +471,9 @@ TEST_F(AxisCommands, Spm30_4_MoveRelative_TrapezoidTimedAsStpcalc) {
 }
 
 TEST_F(AxisCommands, Spm30_4_MoveRelative_ShortMoveNeverPassesTheStpcalcPeak) {
+  AxisConfig c;
+  c.stpcalc_peak_short_moves = true;  // the option: STPCALC's figures (B1.3.6)
+  build(c);
   clear();
   move_rel(-300);  // needs 550 pulses to reach the running velocity
   EXPECT_FALSE(axis->dir_output_high());
@@ -487,16 +490,10 @@ TEST_F(AxisCommands, Spm30_4_MoveRelative_ShortMoveNeverPassesTheStpcalcPeak) {
   EXPECT_FALSE(axis->dir_output_high());
 }
 
-// REPRODUCER (engine, not the axis: node/motion/ramp.cpp RampSpec::peak_level_for). SPM30
-// 3.4.5 and 4 MOVE RELATIVE: "If the move gets halfway to its relative target position before
-// accelerating to the RUNNING VELOCITY, the SPM30 will start decelerating at that point ... the
-// velocity profile becomes triangular." The engine caps the velocity at STPCALC's B1.3.6 peak
-// (base + R_T * (run - base)), which a linear ramp reaches after far fewer than half the
-// pulses (B1.3.8 scales pulses linearly with time, which a ramp does not do), so the move
-// cruises at that peak for over a third of its pulses: a trapezoid 35% longer than STPCALC's
-// own total time (734 ms against 545 ms for 300 pulses at 600/100/1000/500). Disabled until
-// the engine is fixed; no profile can match every B1.3 triangular figure at once.
-TEST_F(AxisCommands, DISABLED_Spm30_3_4_5_ShortMoveTurnsAtHalfwayWithoutCruising) {
+// SPM30 3.4.5 and 4 MOVE RELATIVE: "If the move gets halfway to its relative target position
+// before accelerating to the RUNNING VELOCITY, the SPM30 will start decelerating at that
+// point ... the velocity profile becomes triangular." (STP100 1.7, 5.3.4 the same.)
+TEST_F(AxisCommands, Spm30_3_4_5_ShortMoveTurnsAtHalfwayWithoutCruising) {
   clear();
   move_rel(300);
   auto trace = walk();
@@ -512,6 +509,16 @@ TEST_F(AxisCommands, DISABLED_Spm30_3_4_5_ShortMoveTurnsAtHalfwayWithoutCruising
     }
   EXPECT_NEAR(turn, 150, 2);  // decelerates from the halfway point
   EXPECT_EQ(mech(), 300);
+  // The triangle at the manual's slopes (703 ms) is shorter than the STPCALC-peak option's
+  // trapezoid (725 ms); STPCALC's own B1.3 figure (545 ms) scales pulses linearly with time.
+  Tick halfway = trace.back().t - trace.front().t;
+  AxisConfig c;
+  c.stpcalc_peak_short_moves = true;
+  build(c);
+  clear();
+  move_rel(300);
+  auto capped = walk();
+  EXPECT_LT(halfway, capped.back().t - capped.front().t);
 }
 
 TEST_F(AxisCommands, Spm30_3_4_6_SeparateDecelerationTimeAndZeroMeaningAcceleration) {

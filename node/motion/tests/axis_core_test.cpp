@@ -122,5 +122,20 @@ TEST_F(AxisCoreTest, TheHornerRegistersSeeAndStopAnotherFrontEndsJob) {
   EXPECT_FALSE(horner.status() & status::kMoving);
 }
 
+TEST_F(AxisCoreTest, HornerImmediateStopEndsAnotherFrontEndsJobWithPowerUpLatched) {
+  // A node that drives an axis through another front end (HP, CiA 402) never clears the
+  // Horner %I8 of power-up; %Q16 must still stop the motor (SPM30 4: no status required).
+  Axis horner(AxisConfig{}, core);
+  ASSERT_EQ(horner.status() & status::kErrors, status::kPowerUp);
+  ASSERT_TRUE(core.start(a, constant(1000), +1, std::nullopt, 0));
+  core.advance_to(kClockHz / 10);
+  horner.write_commands(command::kImmediateStop, kClockHz / 10);
+  EXPECT_FALSE(core.busy());
+  EXPECT_EQ(a.aborted_count, 1);
+  const int32_t at = core.position();
+  core.advance_to(kClockHz);
+  EXPECT_EQ(core.position(), at);
+}
+
 }  // namespace
 }  // namespace stepnode::motion

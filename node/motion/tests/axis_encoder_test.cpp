@@ -18,7 +18,8 @@ constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
 
 class AxisEncoder : public ::testing::Test {
  protected:
-  // 2000 steps/rev, a 500-line quadrature encoder decoded x4: 2000 counts/rev, MLT/DIV 1/1.
+  // 2000 steps/rev, a 500-line quadrature encoder decoded x4 (SPM30 5.1 "quadrupled"):
+  // 2000 counts/rev, MLT/DIV 1/1.
   static sim::AxisMachineConfig machine() {
     sim::AxisMachineConfig m;
     m.steps_per_rev = 2000;
@@ -26,12 +27,20 @@ class AxisEncoder : public ::testing::Test {
     m.encoder = sim::EncoderKind::Quadrature;
     return m;
   }
-  static AxisConfig config(int64_t mlt = 1, int64_t div = 1, int64_t tolerance = 0, bool stall = false) {
+  // An SPM30 axis 1 (stall detection follows the tolerance, SPM30 5.4).
+  static AxisConfig config(int64_t mlt = 1, int64_t div = 1, int64_t tolerance = 0) {
     AxisConfig c;
     c.encoder = sim::EncoderKind::Quadrature;
+    c.quadrature_decoding = 4;
     c.encoder_multiplier = mlt;
     c.encoder_divisor = div;
     c.encoder_tolerance = tolerance;
+    return c;
+  }
+  // An STP100: stall detection is its own checkbox (6.3.3).
+  static AxisConfig stp100(int64_t mlt, int64_t div, int64_t tolerance, bool stall) {
+    AxisConfig c = config(mlt, div, tolerance);
+    c.module = AxisConfig::Module::Stp100;
     c.stall_detection = stall;
     return c;
   }
@@ -102,7 +111,7 @@ class AxisEncoder : public ::testing::Test {
 
 // ---- SPM30 5.2/5.3, STP100 6.3.1: the step-to-feedback ratio -------------------------------
 
-TEST_F(AxisEncoder, Spm30_5_2_QuadratureX4RatioOneTracksEveryStepBothWays) {
+TEST_F(AxisEncoder, Spm30_5_1_QuadratureDecodedX4RatioOneTracksEveryStepBothWays) {
   set_position(0);
   move_rel(2345);
   EXPECT_EQ(walk_max_error(), 0);
@@ -131,7 +140,7 @@ TEST_F(AxisEncoder, Spm30_5_3_UpDownEncoder1000Lines200StepsIsMlt1Div5) {
   EXPECT_EQ(axis->encoder_position(), 1866);
 }
 
-TEST_F(AxisEncoder, Stp100_6_3_1_Quadrature250Lines200StepsIsAlsoMlt1Div5) {
+TEST_F(AxisEncoder, Stp100_6_2_1_Quadrature250LinesDecodedX4On200StepsIsAlsoMlt1Div5) {
   sim::AxisMachineConfig m = machine();
   m.steps_per_rev = 200;
   m.encoder_lines = 250;  // x4: 1000 counts/rev
@@ -164,7 +173,7 @@ TEST_F(AxisEncoder, Spm30_5_1_NoEncoderReportsAxis1MotorPosition) {
   sim::AxisMachineConfig m = machine();
   m.encoder = sim::EncoderKind::None;
   m.miss_every = 7;  // even when the motor loses steps
-  AxisConfig c = config(1, 1, 5, true);
+  AxisConfig c = config(1, 1, 5);
   c.encoder = sim::EncoderKind::None;
   build(c, m);
   set_position(10);
@@ -191,6 +200,83 @@ TEST_F(AxisEncoder, Spm30_3_3_2_EncoderPositionZeroAtPowerUpAndLoadedBySetPositi
   EXPECT_EQ(mech(), 13345);
 }
 
+// SPM30 5.3 and STP100 Table 6.1 (the same 16 rows): a 1000-line quadrature encoder on the
+// motor shaft, MLT/DIV for each STEP RESOLUTION. The module counts lines (its default
+// decoding): a row copied from the manual tracks the motor to within one count.
+struct RatioRow {
+  int64_t step_resolution, mlt, div;
+};
+constexpr RatioRow kRatioTable[] = {
+    {200, 1, 5},     {400, 2, 5},     {1000, 1, 1},    {2000, 2, 1},    {5000, 5, 1},    {10000, 10, 1},
+    {12800, 64, 5},  {18000, 18, 1},  {20000, 20, 1},  {21600, 108, 5}, {25000, 25, 1},  {25400, 127, 5},
+    {25600, 128, 5}, {36000, 36, 1},  {50000, 50, 1},  {50800, 254, 5},
+};
+
+TEST_F(AxisEncoder, Spm30_5_3_Stp100_6_3_1_EveryRowOfTheRatioTableTracksA1000LineQuadratureEncoder) {
+  for (auto module : {AxisConfig::Module::Spm30, AxisConfig::Module::Stp100}) {
+    for (const RatioRow& row : kRatioTable) {
+      SCOPED_TRACE(testing::Message() << "step resolution " << row.step_resolution
+                                      << (module == AxisConfig::Module::Spm30 ? " SPM30" : " STP100"));
+      sim::AxisMachineConfig m = machine();
+      m.steps_per_rev = row.step_resolution;
+      m.encoder_lines = 1000;
+      // One count is MLT/DIV steps: the resolution error (5.4 item 2) stays under one count,
+      // so a tolerance of one count more keeps %I9 on and no stall is seen.
+      int64_t count_steps = (row.mlt + row.div - 1) / row.div;
+      AxisConfig c = config(row.mlt, row.div, count_steps + 1);
+      c.quadrature_decoding = 1;
+      c.module = module;
+      c.stall_detection = true;
+      build(c, m);
+      set_position(0);
+      for (int32_t distance : {static_cast<int32_t>(row.step_resolution * 3 / 2 + 7),
+                               static_cast<int32_t>(-row.step_resolution * 2 - 3)}) {
+        move_rel(distance);
+        EXPECT_LE(walk_max_error(), count_steps);
+        EXPECT_EQ(errors(), 0);
+        EXPECT_TRUE(has(status::kPositionValid));
+        int64_t lines = mech() * 1000;
+        int64_t counts = lines >= 0 ? lines / row.step_resolution : -((-lines + row.step_resolution - 1) / row.step_resolution);
+        int64_t scaled = counts * row.mlt;
+        int64_t expected = scaled >= 0 ? scaled / row.div : -((-scaled + row.div - 1) / row.div);
+        EXPECT_EQ(axis->encoder_position(), expected);
+      }
+      EXPECT_EQ(axis->motor_position(), mech());
+    }
+  }
+}
+
+TEST_F(AxisEncoder, Spm30_5_1_DecodingX2AndX4CountEachLineTwiceAndFourTimes) {
+  // "a quadrature encoder's resolution can be effectively doubled or quadrupled": 1000 lines
+  // on 1000 steps/rev is MLT/DIV 1/1 counted once, 1/2 doubled and 1/4 quadrupled.
+  for (int64_t decoding : {1, 2, 4}) {
+    sim::AxisMachineConfig m = machine();
+    m.steps_per_rev = 1000;
+    m.encoder_lines = 1000;
+    AxisConfig c = config(1, decoding, 1);
+    c.quadrature_decoding = decoding;
+    build(c, m);
+    set_position(0);
+    move_rel(1234);
+    EXPECT_EQ(walk_max_error(), 0) << decoding;
+    EXPECT_EQ(axis->encoder_position(), 1234) << decoding;
+    EXPECT_TRUE(has(status::kPositionValid)) << decoding;
+  }
+  // The table's row with the encoder decoded x4 reads four times the motor position: a
+  // configuration error, shown as %I9 off on the first move.
+  sim::AxisMachineConfig m = machine();
+  m.steps_per_rev = 1000;
+  m.encoder_lines = 1000;
+  AxisConfig c = config(1, 1, 5);
+  c.quadrature_decoding = 4;
+  c.encoder_tolerance = 0;
+  build(c, m);
+  set_position(0);
+  move_rel(100);
+  walk();
+  EXPECT_EQ(axis->encoder_position(), 400);
+}
+
 // ---- SPM30 5.4, STP100 6.3.2: the encoder tolerance ----------------------------------------
 
 TEST_F(AxisEncoder, Spm30_5_4_PositionInvalidWhenTheDifferenceReachesTheTolerance) {
@@ -209,7 +295,7 @@ TEST_F(AxisEncoder, Spm30_5_4_PositionInvalidWhenTheDifferenceReachesTheToleranc
   EXPECT_EQ(axis->encoder_position(), 0);
 }
 
-TEST_F(AxisEncoder, Stp100_6_3_2_MissedStepsInvalidateOnTheStepThatReachesTheToleranceButDoNotStop) {
+TEST_F(AxisEncoder, Spm30_5_4_MissedStepsInvalidateOnTheStepThatReachesTheToleranceButDoNotStop) {
   sim::AxisMachineConfig m = machine();
   m.miss_every = 50;  // item 4: the motor misses every 50th pulse
   build(config(1, 1, 10), m);
@@ -219,12 +305,23 @@ TEST_F(AxisEncoder, Stp100_6_3_2_MissedStepsInvalidateOnTheStepThatReachesTheTol
   walk([&] {
     if (invalid_at < 0 && !has(status::kPositionValid)) invalid_at = axis->motor_position();
   });
-  EXPECT_EQ(invalid_at, 500);  // the 10th missed pulse is the 500th
+  EXPECT_EQ(invalid_at, 500);  // the 10th missed pulse is the 500th: 10 reaches 10
   // "An invalid position during a move does not automatically stop the move."
   EXPECT_EQ(axis->motor_position(), 1000);
   EXPECT_EQ(mech(), 980);
   EXPECT_EQ(axis->encoder_position(), 980);
   EXPECT_EQ(errors(), 0);
+}
+
+TEST_F(AxisEncoder, Stp100_6_3_2_PositionInvalidOnlyWhenTheDifferenceExceedsTheTolerance) {
+  build(stp100(1, 1, 10, false));
+  set_position(0);
+  motors[0].displace(-10);
+  wait(10);
+  EXPECT_TRUE(has(status::kPositionValid));  // 10 does not exceed 10
+  motors[0].displace(-1);
+  wait(10);
+  EXPECT_FALSE(has(status::kPositionValid));  // 11 does
 }
 
 TEST_F(AxisEncoder, Spm30_5_4_ZeroToleranceDisablesValidation) {
@@ -255,10 +352,77 @@ TEST_F(AxisEncoder, Spm30_5_4_BacklashStyleOffsetBelowToleranceKeepsTheMoveValid
 
 // ---- SPM30 5.4, STP100 6.3.3: stall detection ------------------------------------------------
 
+TEST_F(AxisEncoder, Spm30_5_4_ANonZeroToleranceDetectsAJammedLoadWithNoOtherSetting) {
+  // "when ENCODER TOL is non-zero, the SPM30 uses the encoder feedback pulses to verify motor
+  // velocity during motion": a 2000-step move with the load stuck at 200 does not complete.
+  sim::AxisMachineConfig m = machine();
+  m.stall_above = 200;
+  build(config(1, 1, 10), m);
+  set_position(0);
+  move_rel(2000);
+  walk();
+  EXPECT_EQ(errors(), status::kMotorStalled);
+  EXPECT_FALSE(any(status::kMoving | status::kDecelerating));
+  EXPECT_EQ(mech(), 200);
+  EXPECT_LE(axis->motor_position(), 200 + 40);  // within two windows of 20 counts
+}
+
+TEST_F(AxisEncoder, Spm30_5_4_ZeroToleranceNeverDetectsAStallWhateverTheStp100Checkbox) {
+  // "If encoder tolerance is zero ... the MOTOR STALLED ERROR will never go ON."
+  sim::AxisMachineConfig m = machine();
+  m.stall_above = 200;
+  AxisConfig c = config(1, 1, 0);
+  c.stall_detection = true;  // the STP100's setting: not the SPM30's rule
+  build(c, m);
+  set_position(0);
+  move_rel(2000);
+  walk();
+  EXPECT_EQ(errors(), 0);
+  EXPECT_EQ(axis->motor_position(), 2000);
+  EXPECT_EQ(mech(), 200);
+}
+
+TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectionIsTheCheckboxNotTheTolerance) {
+  sim::AxisMachineConfig m = machine();
+  m.stall_above = 200;
+  build(stp100(1, 1, 0, true), m);
+  set_position(0);
+  move_rel(2000);
+  walk();
+  EXPECT_EQ(errors(), status::kMotorStalled);
+  EXPECT_EQ(mech(), 200);
+}
+
+TEST_F(AxisEncoder, Stp100_6_3_3_TheThresholdIsTenPercentOfTheTheoreticalVelocity) {
+  // A slipping motor that follows one step in n: 11.1 % and exactly 10 % are not a stall
+  // ("less than 10 %"), 9.1 % is, whatever the encoder's rounding.
+  for (uint32_t n : {9u, 10u, 11u}) {
+    for (int64_t mlt_div : {1, 4}) {  // 1 count per step, and 4 steps per count (500 lines x1)
+      sim::AxisMachineConfig m = machine();
+      m.move_every = n;
+      AxisConfig c = stp100(mlt_div, 1, 0, true);
+      c.quadrature_decoding = mlt_div == 1 ? 4 : 1;
+      build(c, m);
+      set_position(0);
+      move_rel(60000);
+      walk();
+      SCOPED_TRACE(testing::Message() << "1 step in " << n << ", " << mlt_div << " steps per count");
+      if (n == 11) {
+        EXPECT_EQ(errors(), status::kMotorStalled);
+        EXPECT_LE(axis->motor_position(), 2 * 1000 * mlt_div);  // within two long windows
+      } else {
+        EXPECT_EQ(errors(), 0);
+        EXPECT_EQ(axis->motor_position(), 60000);
+        EXPECT_EQ(mech(), 60000 / n);
+      }
+    }
+  }
+}
+
 TEST_F(AxisEncoder, Stp100_6_3_3_JammedMotorLatchesMotorStalledAndStopsAtOnce) {
   sim::AxisMachineConfig m = machine();
   m.stall_above = 2000;
-  build(config(1, 1, 10, true), m);
+  build(stp100(1, 1, 10, true), m);
   set_position(0);
   move_rel(5000);
   walk();
@@ -289,7 +453,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectedAtAnyCommandedVelocity) {
   for (uint16_t running : {2, 8191}) {
     sim::AxisMachineConfig m = machine();
     m.stall_below = -300;
-    build(config(1, 1, 10, true), m);
+    build(stp100(1, 1, 10, true), m);
     CommandWords& w = axis->words();
     w.velocity_divisor = running == 2 ? 600 : 20;  // 1..2 steps/s, or up to 245,730 steps/s
     w.base_velocity = 1;
@@ -307,7 +471,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectedAtAnyCommandedVelocity) {
 TEST_F(AxisEncoder, Stp100_6_3_3_SlowerButMovingIsNotAStall) {
   sim::AxisMachineConfig m = machine();
   m.miss_every = 2;  // half the steps lost: 50% of the commanded velocity
-  build(config(1, 1, 255, true), m);
+  build(stp100(1, 1, 255, true), m);
   set_position(0);
   move_rel(3000);
   walk();
@@ -319,7 +483,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_SlowerButMovingIsNotAStall) {
 TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectionOffOrNoEncoderNeverLatches) {
   sim::AxisMachineConfig m = machine();
   m.stall_above = 500;
-  build(config(1, 1, 10, false), m);
+  build(stp100(1, 1, 10, false), m);
   set_position(0);
   move_rel(2000);
   walk();
@@ -328,7 +492,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectionOffOrNoEncoderNeverLatches) {
   EXPECT_EQ(mech(), 500);
   EXPECT_FALSE(has(status::kPositionValid));
   m.encoder = sim::EncoderKind::None;
-  AxisConfig c = config(1, 1, 10, true);
+  AxisConfig c = stp100(1, 1, 10, true);
   c.encoder = sim::EncoderKind::None;
   build(c, m);
   move_rel(2000);
@@ -341,7 +505,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDuringFindHomeEndsIt) {
   sim::AxisMachineConfig m = machine();
   m.home = sim::Cam{5000, 40};
   m.stall_above = 3000;
-  build(config(1, 1, 10, true), m);
+  build(stp100(1, 1, 10, true), m);
   axis->words().destination = 0;
   issue(command::kFindHomeUp);
   walk();
@@ -353,7 +517,7 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDuringFindHomeEndsIt) {
 TEST_F(AxisEncoder, Stp100_4_2_3_1_FindHomeLoadsTheEncoderPosition) {
   sim::AxisMachineConfig m = machine();
   m.home = sim::Cam{700, 40};
-  build(config(1, 1, 5, true), m);
+  build(stp100(1, 1, 5, true), m);
   axis->words().destination = 10'000;
   issue(command::kFindHomeUp);
   walk();

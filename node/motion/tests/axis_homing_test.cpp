@@ -244,8 +244,10 @@ TEST_F(AxisHoming, Stp100_5_3_2_SimpleMethodTrustsTheStopEvenWhenItOvershoots) {
 // STP100 3.2.3 / 5.3.2, SPM30 5.1 (QUAD: the marker as the home input).
 TEST_F(AxisHoming, Stp100_5_3_2_MarkerAsOriginSourceIgnoresTheHomeSwitch) {
   AxisConfig c;
+  c.module = AxisConfig::Module::Stp100;
   c.origin_source = AxisConfig::OriginSource::Marker;
   c.encoder = sim::EncoderKind::Quadrature;
+  c.quadrature_decoding = 4;
   sim::AxisMachineConfig m = machine();
   m.encoder = sim::EncoderKind::Quadrature;  // 2000 steps/rev, 500 lines x4: 1 count per step
   m.home = sim::Cam{100, 40};                // not the origin here
@@ -286,6 +288,43 @@ TEST_F(AxisHoming, Stp100_5_3_2_LimitQualifiedStopsAtTheLimitThenFindsTheNearest
   // Then back at base velocity to the nearest marker below it, and the final approach up.
   expect_homed(8300, -5);
   EXPECT_EQ(turns(s, 0).size(), 2u);  // down from the limit (steps 4-5), up again (step 6)
+}
+
+// SPM30 4 FIND HOME: "If the current axis is axis 1, and the ENCODER configuration parameter
+// is set to QUAD ... (3) When the axis' End Limit input for the current direction becomes
+// active, motion is stopped immediately" and the marker is the home input (5.1), with no
+// other setting.
+TEST_F(AxisHoming, Spm30_4_FindHome_QuadStopsOnTheEndLimitThenHomesOnTheNearestMarker) {
+  AxisConfig c;
+  c.encoder = sim::EncoderKind::Quadrature;  // nothing else: no origin or qualification flag
+  sim::AxisMachineConfig m = machine();
+  m.encoder = sim::EncoderKind::Quadrature;
+  m.home = sim::Cam{5000, 40};  // the home switch is not the home input with QUAD
+  m.upper_limit = 10000;
+  m.marker_offset = 300;  // markers [8300, 8303], [6300, 6303], ... below the limit
+  m.marker_width = 4;
+  build(c, m);
+  home(command::kFindHomeUp, -5);
+  auto s = walk();
+  int64_t highest = 0;
+  for (const auto& x : s) highest = std::max(highest, x.mech);
+  EXPECT_EQ(highest, 10000);  // past the home switch and every marker, to the limit
+  expect_homed(8300, -5);     // the marker closest to the limit switch
+  EXPECT_EQ(turns(s, 0).size(), 2u);
+}
+
+TEST_F(AxisHoming, Stp100_3_2_3_QuadWithoutTheOptionsHomesOnTheHomeSwitch) {
+  // The STP100 makes the marker and the limit qualification options of their own.
+  AxisConfig c;
+  c.module = AxisConfig::Module::Stp100;
+  c.encoder = sim::EncoderKind::Quadrature;
+  sim::AxisMachineConfig m = machine();
+  m.encoder = sim::EncoderKind::Quadrature;
+  m.marker_offset = 300;
+  build(c, m);
+  home(command::kFindHomeUp, 0);
+  walk();
+  expect_homed(5000, 0);
 }
 
 TEST_F(AxisHoming, Stp100_5_3_2_LimitQualifiedWithTheHomeSwitchAsOrigin) {

@@ -191,9 +191,10 @@ TEST_F(AxisMultiplexed, Spm30_3_3_2_EncoderPositionIsAxis1sWhateverIsSelected) {
   // FIND HOME step 7: "and into ENCODER POSITION if axis 1 is selected").
   AxisConfig c;
   c.encoder = sim::EncoderKind::Quadrature;
+  c.quadrature_decoding = 4;
   c.encoder_tolerance = 5;
   sim::AxisMachineConfig m = machine();
-  m.encoder = sim::EncoderKind::Quadrature;  // 2000 steps, 500 lines x4: 1:1
+  m.encoder = sim::EncoderKind::Quadrature;  // 2000 steps, 500 lines decoded x4: 1:1
   build(c, m);
   set_position(40);
   move_rel(60);

@@ -411,6 +411,43 @@ TEST_F(AxisSafety, MasterLost_MovingAxisDeceleratesNotHaltsAndLatchesWatchdog) {
   EXPECT_TRUE(has(status::kMoving));
 }
 
+// SPM30 4 IMMEDIATE STOP / DECELERATE AND STOP: "Status Bits Required: None", so they act
+// while an error is latched, e.g. during the ramp after a lost master.
+TEST_F(AxisSafety, Spm30_4_ImmediateStopIsObeyedWhileAnErrorIsLatched) {
+  clear();
+  set_position(0);
+  move_rel(2900);
+  wait(1000);
+  axis->master_lost(now);
+  ASSERT_EQ(errors(), status::kPowerUp);
+  ASSERT_TRUE(has(status::kMoving | status::kDecelerating));
+  wait(20);
+  issue(command::kImmediateStop);
+  EXPECT_FALSE(any(status::kMoving | status::kDecelerating));  // at once, not after the ramp
+  EXPECT_FALSE(has(status::kPositionValid));                   // "If the axis was moving"
+  EXPECT_EQ(errors(), status::kPowerUp);                       // still latched
+  const int64_t stopped = mech();
+  wait(2000);
+  EXPECT_EQ(mech(), stopped);
+}
+
+TEST_F(AxisSafety, Spm30_4_DecelerateAndStopIsObeyedWhileAnErrorIsLatched) {
+  clear();
+  set_position(0);
+  move_rel(2900);
+  wait(1000);
+  axis->master_lost(now);
+  issue(command::kDecelStop);  // the ramp goes on to base velocity and stops
+  EXPECT_TRUE(has(status::kMoving | status::kDecelerating));
+  wait(5000);
+  EXPECT_FALSE(any(status::kMoving));
+  EXPECT_TRUE(has(status::kPositionValid));
+  EXPECT_FALSE(has(status::kResumable));  // "unless an error occurred"
+  // The other commands still wait for Clear Errors.
+  move_rel(10);
+  EXPECT_FALSE(any(status::kMoving));
+}
+
 TEST_F(AxisSafety, MasterLost_JogStopsWithTheBitStillOnAndRepeatDoesNotRepeat) {
   clear();
   hold(command::kJogDown);

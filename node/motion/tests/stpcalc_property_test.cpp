@@ -1,6 +1,7 @@
 // The engine against STPCALC (SPM30 Appendix B) on thousands of random legal parameter
 // sets: trapezoidal moves within +-1 pulse and +-1 ms of every B1.3 value; triangular
-// moves hit the total exactly, split the pulses Z_A:Z_D, and never pass STPCALC's peak.
+// moves hit the total exactly, split the pulses Z_A:Z_D, and turn where the ramps meet
+// (halfway with equal ramps, SPM30 3.4.5), or with the option never pass STPCALC's peak.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -78,10 +79,11 @@ TEST(StpcalcProperty, TrapezoidalMovesMatchAppendixBWithinOnePulseAndOneMs) {
   }
 }
 
-TEST(StpcalcProperty, TriangularMovesHitTheTotalSplitAsTheManualAndStayBelowThePeak) {
+TEST(StpcalcProperty, TriangularMovesHitTheTotalSplitAsTheManualAndTurnWhereTheRampsMeet) {
   std::mt19937_64 rng(7);
   int checked = 0;
-  while (checked < 2000) {
+  while (checked < 4000) {
+    const bool stpcalc_peak = checked % 2 == 1;  // the axis option, every other move
     StpcalcInput in = random_input(rng);
     StpcalcResult ramp_only = stpcalc(in);
     if (ramp_only.total_acc_dec_pulses < 20 || ramp_only.total_acc_dec_pulses > 150'000) continue;
@@ -89,13 +91,30 @@ TEST(StpcalcProperty, TriangularMovesHitTheTotalSplitAsTheManualAndStayBelowTheP
     StpcalcResult want = stpcalc(in);
     if (!want.triangular) continue;
     RampSpec ramp = horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);
+    if (stpcalc_peak) ramp.short_move = RampSpec::ShortMove::StpcalcPeak;
     MoveRun got = run_move(ramp, *in.total);
     const auto& m = got.marks;
     SCOPED_TRACE(testing::Message() << "total " << *in.total << " AQ3 " << in.aq3 << " AQ4 " << in.aq4
-                                    << " AQ5 " << in.aq5 << " AQ6 " << in.aq6 << " AQ7 " << in.aq7);
+                                    << " AQ5 " << in.aq5 << " AQ6 " << in.aq6 << " AQ7 " << in.aq7
+                                    << (stpcalc_peak ? " STPCALC peak" : ""));
     ASSERT_EQ(got.steps, *in.total);
-    // Never faster than STPCALC's peak velocity (B1.3.6).
-    EXPECT_LE(ramp.velocity_of(m.peak_level), want.peak_velocity + 1e-9);
+    if (stpcalc_peak) {
+      // Never faster than STPCALC's peak velocity (B1.3.6).
+      EXPECT_LE(ramp.velocity_of(m.peak_level), want.peak_velocity + 1e-9);
+    } else {
+      // The turn: the ramps up to the peak and down from it take the move's pulses, to
+      // within one velocity level (SPM30 3.4.5: no cruising, from halfway with equal ramps).
+      auto pulses = [&](int64_t level) {
+        return static_cast<double>(ramp.accel_phase(level) + ramp.decel_phase(level)) /
+               static_cast<double>(ramp.phase_per_step);
+      };
+      const double total = static_cast<double>(*in.total);
+      if (m.peak_level > in.aq4) {
+        EXPECT_LE(pulses(m.peak_level), total);
+      }
+      EXPECT_GT(pulses(m.peak_level + 1), total);
+      EXPECT_LE(static_cast<double>(m.run_steps), pulses(m.peak_level + 1) - pulses(m.peak_level) + 1);
+    }
     // Acceleration and deceleration pulses in the manual's proportion Z_A : Z_D (B1.3.8),
     // to within the pulses of one velocity level.
     double ramp_steps = static_cast<double>(m.accel_steps + m.decel_steps + m.creep_steps);

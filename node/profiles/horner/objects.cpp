@@ -73,6 +73,18 @@ void add_registers(od::Dictionary& od, unsigned a) {
   cfg.add(config_sub::kLimitQualified, "Limit-switch-qualified find home", DT::Boolean, AC::ReadWrite, {0});
   cfg.add(config_sub::kLimitStartedMoves, "Limit-switch-started moves", DT::Boolean, AC::ReadWrite, {0});
   cfg.add(config_sub::kIndexedMoves, "Indexed moves enabled", DT::Boolean, AC::ReadWrite, {1});
+  // Where the manuals differ on the same feature (stall detection, the tolerance test,
+  // QUAD homing), the module whose rules the axis follows.
+  limits<uint8_t>(cfg.add(config_sub::kModuleModel, "Module model (0 SPM30, 1 STP100)", DT::Unsigned8,
+                          AC::ReadWrite, {0}), 0, 1);
+  Entry& decoding = cfg.add(config_sub::kQuadratureDecoding, "Quadrature counts per line (1, 2, 4)",
+                            DT::Unsigned8, AC::ReadWrite, {1});
+  limits<uint8_t>(decoding, 1, 4);
+  cfg.add(config_sub::kStpcalcPeakShortMoves, "Short moves cruise at STPCALC's peak", DT::Boolean,
+          AC::ReadWrite, {0});
+  decoding.validate = [](std::span<const uint8_t> v) {
+    return v[0] == 3 ? od::SdoAbort::InvalidValue : od::SdoAbort::None;
+  };
   od.var(index(a, kDirOutput), axis_name(a, "DIR output"), DT::Boolean, AC::ReadOnly, {0}, true);
 }
 

@@ -48,6 +48,10 @@ void HornerService::load_config(unsigned a) {
   cfg.limit_qualified_home = u8(horner::config_sub::kLimitQualified) != 0;
   cfg.limit_started_moves = u8(horner::config_sub::kLimitStartedMoves) != 0;
   cfg.indexed_moves = u8(horner::config_sub::kIndexedMoves) != 0;
+  cfg.module = u8(horner::config_sub::kModuleModel) ? motion::AxisConfig::Module::Stp100
+                                                    : motion::AxisConfig::Module::Spm30;
+  cfg.quadrature_decoding = u8(horner::config_sub::kQuadratureDecoding);
+  cfg.stpcalc_peak_short_moves = u8(horner::config_sub::kStpcalcPeakShortMoves) != 0;
   axes_.axis(a).set_config(cfg);
   axes_.machine().axes[a].config().encoder = cfg.encoder;  // the encoder is on the axis' first motor
 }

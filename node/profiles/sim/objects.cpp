@@ -41,6 +41,8 @@ void add_machine(od::Dictionary& od, unsigned a) {
   Entry& push = f.add(faults_sub::kDisplace, "Displace the load by steps", DT::Integer32, AC::WriteOnly,
                       encode<int32_t>(0));
   push.persistent = false;
+  f.add(faults_sub::kMoveEvery, "Slipping: only every n-th step moves the load (0 = off)", DT::Unsigned32,
+        AC::ReadWrite, encode<uint32_t>(0));
   od.var(index(a, kMechanicalPosition), name("mechanical position"), DT::Integer32, AC::ReadOnly,
          encode<int32_t>(0), true);
   od.var(index(a, kInputs), name("inputs"), DT::Unsigned8, AC::ReadOnly, {0}, true);

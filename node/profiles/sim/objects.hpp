@@ -29,7 +29,7 @@ constexpr uint8_t kStepsPerRev = 1, kLines = 2, kMarkerOffset = 3, kMarkerWidth 
 }
 namespace faults_sub {
 constexpr uint8_t kStallBelowEnabled = 1, kStallBelow = 2, kStallAboveEnabled = 3, kStallAbove = 4,
-                  kMissEvery = 5, kDisplace = 6;
+                  kMissEvery = 5, kDisplace = 6, kMoveEvery = 7;
 }
 
 // The objects of `motors` simulated motors and the shared e-stop input.

@@ -44,6 +44,7 @@ void SimService::load_machine(unsigned a) {  // a: the motor
   m.stall_above = on(f, faults_sub::kStallAboveEnabled) ? std::optional<int64_t>(i32(f, faults_sub::kStallAbove))
                                                         : std::nullopt;
   m.miss_every = dictionary_.get<uint32_t>(f, faults_sub::kMissEvery);
+  m.move_every = dictionary_.get<uint32_t>(f, faults_sub::kMoveEvery);
 }
 
 void SimService::install_hooks() {

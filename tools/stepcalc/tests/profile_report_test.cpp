@@ -75,8 +75,8 @@ TEST(StepcalcReport, HandCalculatedTrapezoid) {
 //   1093677176 = 222.5 steps: 68 running, 78 decelerating; the ramp down overshoots the
 //   last step's phase by 322 units, so it falls floor(322/101) = 3 ticks before the ramp's
 //   end: 653*1366 - 3 = 891995 ticks.
-TEST(StepcalcReport, HandCalculatedTriangle) {
-  ProfileReport r = make_report({300, 600, 100, 1000, 500, 250});
+TEST(StepcalcReport, HandCalculatedTriangleWithTheStpcalcPeakOption) {
+  ProfileReport r = make_report({300, 600, 100, 1000, 500, 250}, /*stpcalc_peak=*/true);
   EXPECT_TRUE(r.triangular);
   const ProfileValues& s = r.stpcalc;
   EXPECT_NEAR(s.deceleration_rate, 3598.2430, 1e-4);
@@ -100,6 +100,23 @@ TEST(StepcalcReport, HandCalculatedTriangle) {
   EXPECT_DOUBLE_EQ(e.deceleration_time_ms, ticks_to_ms(891'995));    // 181.4768 ms
   EXPECT_DOUBLE_EQ(e.total_time_ms, ticks_to_ms(3'116'493));         // 634.0521 ms
   EXPECT_NE(report_text(r).find("Triangular move"), std::string::npos);
+}
+
+// The same move as the module makes it (SPM30 3.4.5: it turns where the ramps meet, halfway
+// with equal ramps, no cruising): the highest level L whose ramps fit the 300 pulses,
+//   (Z_A + Z_D) * sum(101..L) <= 300 * 4915200  ->  4097 * (L-100)(L+101)/2 <= 1474560000
+//   L = 853: 4097 * 359181 = 1471564557 (fits); L = 854: 4097 * 360136 = 1475477192 (not)
+// so the peak is 853 pulses/s, reached after 753 * 2731 = 2056443 ticks (418.3844 ms); the
+// ramp down takes 753 * 1366 = 1028598 ticks, the last of them cut where the move ends.
+TEST(StepcalcReport, HandCalculatedTriangleAsTheModuleMovesIt) {
+  ProfileReport r = make_report({300, 600, 100, 1000, 500, 250});
+  const ProfileValues& e = r.engine;
+  EXPECT_DOUBLE_EQ(e.peak_velocity, 853.0);
+  EXPECT_GT(e.peak_velocity, r.stpcalc.peak_velocity);  // B1.3.6's peak scales pulses linearly
+  EXPECT_EQ(e.acceleration_pulses + e.running_pulses + e.deceleration_pulses, 300);
+  EXPECT_LE(e.running_pulses, 1);
+  EXPECT_DOUBLE_EQ(e.acceleration_time_ms, ticks_to_ms(2'056'443));
+  EXPECT_NEAR(e.deceleration_time_ms, ticks_to_ms(1'028'598), ticks_to_ms(1366));
 }
 
 // TOTAL -, AQ3 20, AQ4 1, AQ5 8191, AQ6 100, AQ7 0: the 245,730 pulses/s jog ramps.
@@ -160,7 +177,8 @@ TEST(StepcalcReport, ZeroAndOnePulseMoves) {
   EXPECT_DOUBLE_EQ(zero.stpcalc.total_time_ms, 0.0);
   ProfileReport one = make_report({1, 600, 100, 1000, 500, 0});
   EXPECT_EQ(one.engine.acceleration_pulses + one.engine.running_pulses + one.engine.deceleration_pulses, 1);
-  EXPECT_LE(one.engine.peak_velocity, one.stpcalc.peak_velocity);
+  ProfileReport capped = make_report({1, 600, 100, 1000, 500, 0}, /*stpcalc_peak=*/true);
+  EXPECT_LE(capped.engine.peak_velocity, capped.stpcalc.peak_velocity);
 }
 
 TEST(StepcalcReport, JsonHasEveryKeyForStpcalcAndTheEngine) {
