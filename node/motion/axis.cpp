@@ -131,9 +131,16 @@ void Axis::emergency_stop(Tick when, bool was_moving) {
   latched(status::kEmergencyStop, was_moving);
 }
 
+void Axis::end_job() {
+  // STP100 5.3.5 NOTE: "at the end of an Indexed Move, DIR+ and DIR- are always taken Low
+  // and High": DIR is its move-in-progress output, whatever ended the move.
+  if (job_ == Job::Move && move_indexed_) core_.set_dir_output(false);
+  job_ = Job::None;
+}
+
 void Axis::latched(uint16_t error_bits, bool was_moving) {
   if (was_moving) position_valid_ = false;  // SPM30 3.3.1: a sudden stop invalidates the position
-  job_ = Job::None;
+  end_job();
   waiting_for_limit_release_ = false;
   resumable_ = false;
   errors_ |= error_bits;
@@ -247,7 +254,7 @@ void Axis::immediate_stop(Tick now) {
   if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
   core_.abort(this, now);
   waiting_for_limit_release_ = false;
-  job_ = Job::None;
+  end_job();
 }
 
 void Axis::decelerate_and_stop(Tick now) {
@@ -428,7 +435,7 @@ void Axis::job_halted(const FrontEnd& owner, Tick when) {
 
 void Axis::aborted(Tick when) {
   (void)when;
-  job_ = Job::None;  // the e-stop, or another front end's stop (emergency_stop latches %I1)
+  end_job();  // the e-stop, or another front end's stop (emergency_stop latches %I1)
   waiting_for_limit_release_ = false;
 }
 
@@ -476,12 +483,11 @@ void Axis::after_step(const Step& step) {
 
 void Axis::finish(Tick now) {
   Job job = job_;
-  job_ = Job::None;
+  end_job();
   if (job == Job::None) return;  // the Home a Decelerate and Stop ended (its ramp just ran out)
   if (job == Job::Home) return notify(AxisEvent::StatusChanged);  // stopped before home
   if (job == Job::Move) {
     if (move_done_steps_ >= move_target_steps_) {
-      if (move_indexed_) core_.set_dir_output(false);  // DIR as move-in-progress (STP100 5.3.5)
       notify(AxisEvent::MoveDone);
       // STP100 5.3.6: a relative or indexed move repeats while %Q12 is on.
       if (move_repeatable_ && is_set(commands_, command::kRepeatMove) && !errors_)

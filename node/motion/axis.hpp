@@ -145,6 +145,7 @@ class Axis final : public FrontEnd, public AxisListener {
   bool start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now);
   void start_base_run(int direction, Tick now);
   void finish(Tick now);
+  void end_job();
   bool moving() const { return core_.moving() || waiting_for_limit_release_; }
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();

@@ -179,6 +179,31 @@ TEST_F(AxisIndexed, Stp100_5_3_5_IndexedMoveDownEndsBelowTheIndex) {
   EXPECT_FALSE(axis->dir_output_high());
 }
 
+// STP100 5.3.5 NOTE: "at the end of an Indexed Move, DIR+ and DIR- are always taken Low and
+// High", whatever ended it.
+TEST_F(AxisIndexed, Stp100_5_3_5_DirGoesLowAtTheEndOfAnIndexedMoveWhateverEndedIt) {
+  enum class End { DecelStop, ImmediateStop, Limit, EmergencyStop };
+  for (End how : {End::DecelStop, End::ImmediateStop, End::Limit, End::EmergencyStop}) {
+    sim::AxisMachineConfig m = machine(50'000);
+    m.upper_limit = 2000;
+    build({}, m);
+    indexed(10000, 700, 1000, 8000);
+    ASSERT_TRUE(axis->dir_output_high());
+    if (how != End::Limit) wait(300);
+    switch (how) {
+      case End::DecelStop: issue(command::kDecelStop); break;
+      case End::ImmediateStop: issue(command::kImmediateStop); break;
+      case End::EmergencyStop: estop = true; break;
+      case End::Limit: break;
+    }
+    walk();
+    EXPECT_FALSE(any(status::kMoving)) << static_cast<int>(how);
+    EXPECT_LT(mech(), 10000) << static_cast<int>(how);
+    EXPECT_FALSE(axis->dir_output_high()) << static_cast<int>(how);
+    estop = false;
+  }
+}
+
 TEST_F(AxisIndexed, Stp100_5_3_5_RelativeAndAbsoluteMovesLeaveDirAsItWas) {
   axis->words().destination = 100;
   issue(command::kMoveRelative);
