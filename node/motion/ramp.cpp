@@ -98,20 +98,21 @@ int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5) {
   return max_useful < 27300 ? max_useful : 27300;
 }
 
+int64_t horner_z(int64_t ms, int64_t aq4, int64_t aq5) {
+  int64_t num = ms * 24576, den = (aq5 - aq4) * 5;
+  return (num + den - 1) / den;  // rounded up (B1.3.1)
+}
+
 RampSpec horner_ramp(int64_t aq3, int64_t aq4, int64_t aq5, int64_t aq6, int64_t aq7) {
   check(aq3, 20, 65535, "velocity resolution %AQ3");
   check(aq4, 1, 8190, "base velocity %AQ4");
   check(aq5, aq4 + 1, 8191, "running velocity %AQ5 (must exceed the base velocity)");
-  check(aq6, 1, horner_max_ramp_ms(aq4, aq5) < 1 ? 1 : horner_max_ramp_ms(aq4, aq5),
-        "acceleration time %AQ6 (ms)");
-  if (aq7 != 0)
-    check(aq7, 1, horner_max_ramp_ms(aq4, aq5) < 1 ? 1 : horner_max_ramp_ms(aq4, aq5),
-          "deceleration time %AQ7 (ms)");
+  // SPM30 3.4 table: 1..27300 and 0..27,300 are the registers' ranges; (AQ5-AQ4)/0.3 is only
+  // the "maximum useful value" (3.4.5, 3.4.6): a longer time ramps no longer than it does.
+  check(aq6, 1, 27300, "acceleration time %AQ6 (ms)");
+  check(aq7, 0, 27300, "deceleration time %AQ7 (ms)");
   if (aq7 == 0) aq7 = aq6;  // SPM30 3.4.6: 0 means "same as acceleration"
-  auto z = [&](int64_t ms) {
-    int64_t num = ms * 24576, den = (aq5 - aq4) * 5;
-    return Rational{(num + den - 1) / den, 1};  // rounded up (B1.3.1)
-  };
+  auto z = [&](int64_t ms) { return Rational{std::min(horner_z(ms, aq4, aq5), kHornerMaxZ), 1}; };
   RampSpec r;
   r.phase_per_step = 8192 * aq3;  // one level = 600/AQ3 steps/s = level/(8192*AQ3) per tick
   r.base_level = aq4;

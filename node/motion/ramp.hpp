@@ -75,7 +75,11 @@ inline Rational slope_ticks_per_level(int64_t accel, int64_t levels_per_hz) {
 }
 
 // Largest useful acceleration/deceleration time (SPM30 3.4.5): (AQ5-AQ4)/0.3 ms, capped at
-// 27300; beyond it Z would exceed 16384.
+// 27300; beyond it Z would exceed 16384, the longest interval the module's ramp takes per
+// velocity level: a longer AQ6/AQ7 is legal and ramps in the maximum useful time.
 int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5);
+constexpr int64_t kHornerMaxZ = 16384;
+// STPCALC's Z for a ramp time (B1.3.1, rounded up), without the module's limit.
+int64_t horner_z(int64_t ms, int64_t aq4, int64_t aq5);
 
 }  // namespace stepnode::motion

@@ -14,8 +14,11 @@ StpcalcResult stpcalc(const StpcalcInput& in) {
   StpcalcResult r;
   const double aq3 = static_cast<double>(in.aq3), aq4 = static_cast<double>(in.aq4),
                aq5 = static_cast<double>(in.aq5);
-  r.z_a = ramp.accel_ticks_per_level.num;
-  r.z_d = ramp.decel_ticks_per_level.num;
+  (void)ramp;
+  // STPCALC's formulas as printed (B1.3.1/B1.3.2): an AQ6/AQ7 above the maximum useful value
+  // gives STPCALC's longer figures; the module (the engine) ramps in the maximum useful time.
+  r.z_a = horner_z(in.aq6, in.aq4, in.aq5);
+  r.z_d = horner_z(in.aq7 == 0 ? in.aq6 : in.aq7, in.aq4, in.aq5);
   const double za = static_cast<double>(r.z_a), zd = static_cast<double>(r.z_d);
   r.acceleration_rate = 4915200.0 * 600.0 / (za * aq3);                           // B1.3.1
   r.deceleration_rate = 4915200.0 * 600.0 / (zd * aq3);                           // B1.3.2

@@ -3,7 +3,9 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <utility>
 
+#include "node/motion/ramp.hpp"
 #include "tools/stepcalc/engine_profile.hpp"
 
 namespace stepnode::tools {
@@ -47,6 +49,7 @@ ProfileReport make_report(const motion::StpcalcInput& input, bool stpcalc_peak) 
   ProfileReport r;
   r.input = input;
   r.triangular = s.triangular;
+  r.stpcalc_peak = stpcalc_peak;
   r.stpcalc = from_stpcalc(s);
   EngineProfile e = run_engine(input, stpcalc_peak);
   r.engine = e.values;
@@ -95,11 +98,25 @@ std::string report_text(const ProfileReport& r) {
     row("Actual total move time =", s.total_time_ms, e.total_time_ms, "mS");
   else
     row("Actual total acc/dec time =", s.total_time_ms, e.total_time_ms, "mS");
-  if (r.triangular)
+  if (r.triangular && r.stpcalc_peak)
     out +=
         "Triangular move: STPCALC scales the ramps' pulses and times by R_T = total/(Pulse_A+Pulse_D)\n"
-        "(B1.3.8); the engine ramps to STPCALC's peak velocity (B1.3.6), never above it, and runs at\n"
-        "that peak for the pulses its ramps leave, so its pulse split and times differ from STPCALC's.\n";
+        "(B1.3.8); the engine (--stpcalc-peak) ramps to STPCALC's peak velocity (B1.3.6), never above\n"
+        "it, and runs at that peak for the pulses its ramps leave.\n";
+  else if (r.triangular)
+    out +=
+        "Triangular move: STPCALC scales the ramps' pulses and times by R_T = total/(Pulse_A+Pulse_D)\n"
+        "(B1.3.8), which no ramp does; the engine, as the module (SPM30 3.4.5), turns on the highest\n"
+        "velocity whose ramps fit the move (halfway with equal ramps) and does not cruise.\n";
+  const int64_t useful = motion::horner_max_ramp_ms(r.input.aq4, r.input.aq5);
+  for (auto [name, ms] : {std::pair{"AQ6", r.input.aq6}, std::pair{"AQ7", r.input.aq7}})
+    if (ms > useful) {
+      std::snprintf(line, sizeof line,
+                    "%s %lld mS is above its maximum useful value (AQ5-AQ4)/0.3 = %lld mS (SPM30 3.4.5): the\n"
+                    "module ramps in %lld mS; STPCALC's figures use the time as given.\n",
+                    name, static_cast<long long>(ms), static_cast<long long>(useful), static_cast<long long>(useful));
+      out += line;
+    }
   if (!total)
     out += "No total: the engine's figures are an unbounded move stopped as soon as it runs.\n";
   return out;

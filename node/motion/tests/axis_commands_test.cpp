@@ -321,7 +321,6 @@ TEST_F(AxisCommands, Spm30_3_4_RampWordsOutsideTheirRangesAreIllegalMoves) {
       {600, 100, 1000, 0, 0},      // 3.4.5: acceleration 1..27300
       {600, 100, 1000, 27301, 0},  //
       {600, 100, 1000, 500, 27301},  // 3.4.6: deceleration 0..27300
-      {600, 100, 1000, 3001, 0},   // 3.4.5: beyond (AQ5-AQ4)/0.3 = 3000 ms (STPCALC B1.2.5)
   };
   clear();
   for (const Bad& b : cases) {
@@ -352,6 +351,25 @@ TEST_F(AxisCommands, Spm30_3_4_RampWordsOutsideTheirRangesAreIllegalMoves) {
   EXPECT_EQ(errors(), 0);
   wait(1000);
   EXPECT_EQ(mech(), 10);
+}
+
+// SPM30 3.4 table (AQ6 1..27300, AQ7 0..27,300), 3.4.5/3.4.6: (AQ5-AQ4)/0.3 is only the
+// "maximum useful value", so a longer time is legal; the ramp takes the maximum useful time.
+TEST_F(AxisCommands, Spm30_3_4_5_RampTimesAboveTheMaximumUsefulValueAreLegal) {
+  clear();
+  for (uint16_t accel : {3000, 3001, 27300}) {  // AQ5-AQ4 = 900: maximum useful 3000 ms
+    CommandWords& w = axis->words();
+    w.acceleration_ms = accel;
+    w.deceleration_ms = accel == 3000 ? 0 : 27300;
+    Tick start = now;
+    move_rel(20000);
+    auto trace = walk();
+    EXPECT_EQ(errors(), 0) << accel;
+    EXPECT_EQ(mech() % 20000, 0) << accel;
+    const Tick running = first(trace, status::kAccelerating, false);
+    EXPECT_NEAR(ticks_to_ms(running - start), 3000.0, 1.5) << accel;  // 900 levels of Z = 16384 ticks
+    EXPECT_NEAR(ticks_to_ms(trace.back().t - first(trace, status::kDecelerating, true)), 3000.0, 1.5) << accel;
+  }
 }
 
 TEST_F(AxisCommands, Spm30_3_4_WordsMayChangeAsSoonAsTheMoveStarted) {

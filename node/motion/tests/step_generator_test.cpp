@@ -32,7 +32,8 @@ TEST(HornerRamp, OutOfRangeRegistersAreRefusedWithTheirRange) {
   EXPECT_THROW(horner_ramp(600, 0, 2, 1, 0), std::invalid_argument);
   EXPECT_THROW(horner_ramp(600, 10, 10, 1, 0), std::invalid_argument);   // run must exceed base
   EXPECT_THROW(horner_ramp(600, 1, 8192, 1, 0), std::invalid_argument);
-  EXPECT_THROW(horner_ramp(600, 1, 301, 1001, 0), std::invalid_argument);  // > (AQ5-AQ4)/0.3
+  EXPECT_NO_THROW(horner_ramp(600, 1, 301, 1001, 0));  // > (AQ5-AQ4)/0.3: legal, "maximum useful"
+  EXPECT_EQ(horner_ramp(600, 1, 301, 27300, 27300).decel_ticks_per_level.num, kHornerMaxZ);
   try {
     horner_ramp(600, 1, 8191, 27301, 0);
     FAIL();

@@ -201,6 +201,17 @@ TEST(StepcalcReport, JsonHasEveryKeyForStpcalcAndTheEngine) {
   }
 }
 
+// SPM30 3.4.5: AQ6 above (AQ5-AQ4)/0.3 is legal; STPCALC's formulas take it as given
+// (B1.3.1: Z_A = ceil(27300*24576/4500) = 149095, Time_A = 900*149095*5/24576 = 27300.1 ms),
+// the module ramps in the maximum useful 3000 ms (Z = 16384), and the report says so.
+TEST(StepcalcReport, AccelerationAboveTheMaximumUsefulValue) {
+  ProfileReport r = make_report({100000, 600, 100, 1000, 27300, 0});
+  EXPECT_NEAR(r.stpcalc.acceleration_time_ms, 900.0 * 149095 * 5 / 24576, 1e-6);
+  EXPECT_DOUBLE_EQ(r.engine.acceleration_time_ms, ticks_to_ms(900 * 16384));
+  std::string text = report_text(r);
+  EXPECT_NE(text.find("above its maximum useful value (AQ5-AQ4)/0.3 = 3000 mS"), std::string::npos) << text;
+}
+
 TEST(StepcalcReport, RefusesOutOfRangeInputsNamingTheRange) {
   auto message = [](motion::StpcalcInput in) -> std::string {
     try {
@@ -216,9 +227,9 @@ TEST(StepcalcReport, RefusesOutOfRangeInputsNamingTheRange) {
   EXPECT_NE(message({100, 600, 0, 1000, 500, 0}).find("1..8190"), std::string::npos);
   EXPECT_NE(message({100, 600, 100, 100, 500, 0}).find("101..8191"), std::string::npos);
   EXPECT_NE(message({100, 600, 100, 8192, 500, 0}).find("101..8191"), std::string::npos);
-  EXPECT_NE(message({100, 600, 100, 1000, 3001, 0}).find("1..3000"), std::string::npos);  // (1000-100)/0.3
+  EXPECT_EQ(message({100, 600, 100, 1000, 3001, 0}), "accepted");  // above (1000-100)/0.3: legal (3.4.5)
   EXPECT_NE(message({100, 600, 100, 1000, 0, 0}).find("%AQ6"), std::string::npos);
-  EXPECT_NE(message({100, 600, 100, 1000, 500, 3001}).find("%AQ7"), std::string::npos);
+  EXPECT_NE(message({100, 600, 100, 1000, 500, 27301}).find("%AQ7"), std::string::npos);
   EXPECT_NE(message({100, 600, 1, 8191, 27301, 0}).find("1..27300"), std::string::npos);
   EXPECT_EQ(message({16'777'215, 65535, 8190, 8191, 3, 3}), "accepted");  // the extremes
 }
