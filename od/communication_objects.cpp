@@ -1,6 +1,8 @@
 #include "od/communication_objects.hpp"
 
 #include <cstdio>
+#include <string>
+#include <string_view>
 
 #include "od/can_frame.hpp"
 #include "od/cob_id.hpp"
@@ -239,6 +241,19 @@ void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigne
   for (unsigned n = 0; n < pdos && n < kMaxPdos; ++n) {
     add_pdo(od, PdoDirection::Receive, n, info.node_id);
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);
+  }
+}
+
+void apply_node_id(Dictionary& od, uint8_t node_id) {
+  constexpr std::string_view kPrefix = "$NODEID+";
+  for (const auto& [index, unused] : od.objects()) {
+    (void)unused;
+    for (auto& [sub, e] : od.object(index)->entries) {
+      if (!e.eds_default.starts_with(kPrefix) || e.type != DataType::Unsigned32) continue;
+      const uint32_t offset =
+          static_cast<uint32_t>(std::stoul(e.eds_default.substr(kPrefix.size()), nullptr, 0));
+      e.default_value = encode<uint32_t>(offset + node_id);
+    }
   }
 }
 
