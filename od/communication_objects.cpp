@@ -119,6 +119,13 @@ void add_heartbeat(Dictionary& od) {
   od.var(0x1017, "Producer heartbeat time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(1000));
 }
 
+void add_node_guarding(Dictionary& od) {
+  // CiA 301 7.5.2.11/12: guard time (ms) x life time factor = the node life time; 0 in
+  // either: no life guarding. Used only while the heartbeat producer time 0x1017 is 0.
+  od.var(0x100C, "Guard time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+  od.var(0x100D, "Life time factor", DT::Unsigned8, AC::ReadWrite, {0});
+}
+
 void add_error_behaviour(Dictionary& od) {
   // CiA 301 7.5.2.32: what a communication error (heartbeat consumer timeout, bus-off) does
   // to the NMT state: 0 pre-operational (if operational), 1 no change, 2 stopped. 3..0x7F
@@ -235,6 +242,7 @@ void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigne
   add_error_history(od);
   add_sync_and_emcy(od, info);
   add_heartbeat(od);
+  add_node_guarding(od);
   add_error_behaviour(od);
   add_store_restore(od);
   add_sdo_server_parameters(od, info.node_id);
