@@ -58,10 +58,26 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                     .recovered =
                         [this](uint8_t node, uint64_t now) {
                           spdlog::info("heartbeat of node {} is back (or no longer watched)", node);
-                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          if (!consumer_.any_timed_out() && !guarding_.lost())
+                            emcy_.clear(emcy_code::kHeartbeatError, now);
                           if (app_) app_->heartbeat_recovered(node, now);
                         },
                     .remote_reset = nullptr}),
+      guarding_(dictionary_, options_.device.node_id,
+                NodeGuarding::Events{
+                    .lost =
+                        [this](uint64_t now) {
+                          spdlog::warn("life guarding: no node guarding request within the node life time");
+                          // CiA 301: 0x8130 is "life guard error or heartbeat error".
+                          emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication, {}, now);
+                          communication_error(CommunicationError::LifeGuardingLost, 0, now);
+                        },
+                    .recovered =
+                        [this](uint64_t now) {
+                          spdlog::info("life guarding: the master's requests are back (or guarding is off)");
+                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          if (app_) app_->life_guarding_recovered(now);
+                        }}),
       sync_(
           dictionary_, [this](const od::CanFrame& f) { send(f); },
           [this](uint8_t counter, uint64_t now) {
@@ -181,6 +197,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   pdo_.mark_dirty();
   sdo_.reconfigure();  // 0x1201..0x1203 as stored (or configured)
   consumer_.reset();
+  guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
   sync_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
   send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
@@ -194,6 +211,7 @@ void CanopenNode::adopt_node_id(uint8_t id) {
   // reach the dictionary with the reset that follows.
   od::apply_node_id(dictionary_, id);
   heartbeat_.set_node_id(id);
+  guarding_.set_node_id(id);
   store_.set_file(parameter_file_for(options_));
 }
 
@@ -263,7 +281,12 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
     return;
   }
   if (!configured()) return;
-  consumer_.on_frame(frame, now_us);  // error control runs in every state
+  // Error control runs in every state.
+  if (auto answer = guarding_.on_frame(frame, state_, now_us)) {
+    send(*answer);
+    return;
+  }
+  consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
   if (sync_.on_frame(frame, now_us)) {
@@ -282,6 +305,7 @@ void CanopenNode::on_tick(uint64_t now_us) {
   if (app_ && booted_) app_->advance(now_us);
   consumer_.on_tick(now_us);
   if (state_ == NmtState::Initialising) return;
+  guarding_.on_tick(now_us);
   heartbeat_.on_tick(state_, now_us);
   if (state_ == NmtState::Stopped) return;
   sdo_.on_tick(now_us);

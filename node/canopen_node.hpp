@@ -14,6 +14,7 @@
 #include "node/lss_slave.hpp"
 #include "node/lss_store.hpp"
 #include "node/nmt.hpp"
+#include "node/node_guarding.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
 #include "node/sdo_server_channels.hpp"
@@ -97,6 +98,7 @@ class CanopenNode {
   EmcyProducer emcy_;
   HeartbeatProducer heartbeat_;
   HeartbeatConsumer consumer_;
+  NodeGuarding guarding_;  // 0x100C, 0x100D; only while 0x1017 is 0
   SyncService sync_;
   PdoEngine pdo_;
   SdoServerChannels sdo_;  // 0x1200..0x1203
