@@ -22,6 +22,7 @@ class Application {
   virtual void reset_application(uint64_t /*now_us*/) {}
   // Every SYNC received (or produced here), after the synchronous PDOs.
   virtual void sync(uint64_t /*now_us*/) {}
+  // A new NMT state; Initialising only when a running device lost its node-ID over LSS.
   virtual void state_changed(NmtState /*state*/, uint64_t /*now_us*/) {}
   // A communication error, before 0x1029's change of NMT state. `node`: the monitored node
   // whose heartbeat was lost (0 for a bus-off and for life guarding: the guarding master).

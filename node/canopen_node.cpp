@@ -183,6 +183,9 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
     // the LSS slave, until a master configures one and switches it to waiting.
     spdlog::info("no node-ID: waiting for an LSS master (identity serial number 0x{:08X})",
                  options_.device.serial_number);
+    // A running device that lost its node-ID (0xFF configured over LSS) can no longer be
+    // reached by SDO or PDO: the application is told, as for NMT Stopped.
+    if (booted_ && app_) app_->state_changed(NmtState::Initialising, now_us);
     return;
   }
   if (!booted_) reset_application = true;  // the first boot powers the application up

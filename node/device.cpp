@@ -85,8 +85,10 @@ void Device::state_changed(NmtState state, uint64_t now_us) {
   // NMT Stopped: no SDO and no PDO reach the axes any more, so the master has lost control
   // of them; they ramp down and latch %I8 exactly as for a lost master (README, "NMT
   // states and motion"). Pre-operational keeps SDO, and the axes keep their job.
-  if (state == NmtState::Stopped) {
-    spdlog::warn("NMT stopped: every moving axis ramps down");
+  // Initialising is only reported for a node that lost its node-ID over LSS: unreachable
+  // as well.
+  if (state == NmtState::Stopped || state == NmtState::Initialising) {
+    spdlog::warn("NMT {}: every moving axis ramps down", state == NmtState::Stopped ? "stopped" : "initialising (no node-ID)");
     master_lost(now_us);
   }
 }

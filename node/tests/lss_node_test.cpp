@@ -6,6 +6,8 @@
 // answered at once.
 #include <filesystem>
 
+#include "node/profiles/horner/bits.hpp"
+#include "node/profiles/horner/objects.hpp"
 #include "node/tests/node_harness.hpp"
 
 namespace stepnode::node::test {
@@ -134,6 +136,33 @@ TEST_F(LssNodeTest, AConfiguredNodeTakesANewNodeIdAtResetCommunication) {
   frame(CanFrame(0x606, {0x40, 0x18, 0x10, 0x04, 0, 0, 0, 0}));
   EXPECT_EQ(with_id(0x586).size(), 1u);
   EXPECT_TRUE(with_id(0x585).empty());
+}
+
+TEST_F(LssNodeTest, ARunningNodeConfiguredToNoNodeIdFallsSilentAndItsAxesRampDown) {
+  make_node(kId, NodeIdOrigin::CommandLine);
+  namespace axis_obj = horner::obj;
+  const uint16_t commands = axis_obj::index(0, axis_obj::kCommandBits);
+  const uint16_t status = axis_obj::index(0, axis_obj::kStatusBits);
+  ASSERT_EQ(sdo_write(commands, 0, horner::command::kClearErrors, 2), 0u);
+  ASSERT_EQ(sdo_write(commands, 0, 0, 2), 0u);
+  nmt(0x01);
+  ASSERT_EQ(sdo_write(commands, 0, horner::command::kJogUp, 2), 0u);
+  advance_ms(500);
+  ASSERT_EQ(od().get<uint16_t>(status, 0) & horner::status::kDecelerating, 0);
+  frame(lss({0x04, 0x01}));
+  frame(lss({0x11, 0xFF}));
+  frame(lss({0x04, 0x00}));
+  EXPECT_TRUE(node->configured()) << "until reset communication";
+  nmt(0x82);
+  EXPECT_FALSE(node->configured());
+  EXPECT_EQ(node->state(), NmtState::Initialising);
+  EXPECT_NE(od().get<uint16_t>(status, 0) & horner::status::kDecelerating, 0);
+  EXPECT_NE(od().get<uint16_t>(status, 0) & horner::status::kPowerUp, 0) << "%I8 latches";
+  clear_sent();
+  advance_ms(2000);
+  EXPECT_TRUE(with_id(kHeartbeatId).empty());
+  frame(lss({0x4C}));
+  EXPECT_EQ(with_id(kLssTx), std::vector<CanFrame>{lss_answer({0x50})});
 }
 
 TEST_F(LssNodeTest, BackToBackRequestsAreEachAnswered) {
