@@ -9,7 +9,8 @@
 namespace stepnode::node {
 
 // The communication errors of CiA 301's error class "communication error" (0x1029 sub 1).
-enum class CommunicationError { HeartbeatLost, BusOff };
+// LifeGuardingLost: no node guarding request within the node life time (0x100C x 0x100D).
+enum class CommunicationError { HeartbeatLost, BusOff, LifeGuardingLost };
 
 class Application {
  public:
@@ -21,12 +22,15 @@ class Application {
   virtual void reset_application(uint64_t /*now_us*/) {}
   // Every SYNC received (or produced here), after the synchronous PDOs.
   virtual void sync(uint64_t /*now_us*/) {}
+  // A new NMT state; Initialising only when a running device lost its node-ID over LSS.
   virtual void state_changed(NmtState /*state*/, uint64_t /*now_us*/) {}
   // A communication error, before 0x1029's change of NMT state. `node`: the monitored node
-  // whose heartbeat was lost (0 for a bus-off).
+  // whose heartbeat was lost (0 for a bus-off and for life guarding: the guarding master).
   virtual void communication_error(CommunicationError /*error*/, uint8_t /*node*/, uint64_t /*now_us*/) {}
   // The heartbeat of monitored node `node` is back (or it is no longer watched).
   virtual void heartbeat_recovered(uint8_t /*node*/, uint64_t /*now_us*/) {}
+  // The guarding master's requests are back after a life guarding event.
+  virtual void life_guarding_recovered(uint64_t /*now_us*/) {}
 };
 
 }  // namespace stepnode::node

@@ -21,10 +21,26 @@ NodeOptions described(NodeOptions o) {
   return o;
 }
 
+lss::Identity identity_of(const od::DeviceInfo& d) {
+  return {d.vendor_id, d.product_code, d.revision, d.serial_number};
+}
+
+// The precedence of the node-ID's sources: command line, then LSS-stored, then the
+// configuration file; none of them: unconfigured (README, "LSS").
+NodeOptions with_stored_node_id(NodeOptions o, const std::optional<LssStore::Contents>& stored) {
+  if (stored && o.node_id_origin != NodeIdOrigin::CommandLine) {
+    spdlog::info("LSS: node-ID {} as stored by an LSS master", stored->node_id);
+    o.device.node_id = stored->node_id;
+  }
+  return o;
+}
+
 }  // namespace
 
 CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
-    : options_(described(std::move(options))),
+    : lss_store_(options.state_dir, identity_of(options.device)),
+      lss_stored_(lss_store_.load()),
+      options_(described(with_stored_node_id(std::move(options), lss_stored_))),
       send_(std::move(send_frame)),
       store_((add_node_objects(dictionary_, options_.device, options_.layout), dictionary_),
              parameter_file_for(options_)),
@@ -42,10 +58,26 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                     .recovered =
                         [this](uint8_t node, uint64_t now) {
                           spdlog::info("heartbeat of node {} is back (or no longer watched)", node);
-                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          if (!consumer_.any_timed_out() && !guarding_.lost())
+                            emcy_.clear(emcy_code::kHeartbeatError, now);
                           if (app_) app_->heartbeat_recovered(node, now);
                         },
                     .remote_reset = nullptr}),
+      guarding_(dictionary_, options_.device.node_id,
+                NodeGuarding::Events{
+                    .lost =
+                        [this](uint64_t now) {
+                          spdlog::warn("life guarding: no node guarding request within the node life time");
+                          // CiA 301: 0x8130 is "life guard error or heartbeat error".
+                          emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication, {}, now);
+                          communication_error(CommunicationError::LifeGuardingLost, 0, now);
+                        },
+                    .recovered =
+                        [this](uint64_t now) {
+                          spdlog::info("life guarding: the master's requests are back (or guarding is off)");
+                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          if (app_) app_->life_guarding_recovered(now);
+                        }}),
       sync_(
           dictionary_, [this](const od::CanFrame& f) { send(f); },
           [this](uint8_t counter, uint64_t now) {
@@ -57,7 +89,12 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           }),
       pdo_(dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); },
            emcy_),
-      sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }) {
+      sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }),
+      lss_(identity_of(options_.device), options_.device.node_id,
+           lss_stored_ ? lss_stored_->bit_timing : std::nullopt,
+           [this](uint8_t node_id, std::optional<uint8_t> bit_timing) {
+             return lss_store_.save({node_id, bit_timing});
+           }) {
   install_service_hooks();
 }
 
@@ -96,7 +133,12 @@ void CanopenNode::install_service_hooks() {
   };
 }
 
-void CanopenNode::start(uint64_t now_us) { initialise(true, now_us); }
+void CanopenNode::start(uint64_t now_us) {
+  if (auto index = lss_.active_bit_timing())
+    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); the interface's bit rate is set outside "
+                 "stepnode (ip link)", *lss::bit_rate_kbit(*index), *index);
+  initialise(true, now_us);
+}
 
 void CanopenNode::report_at_power_up(uint16_t code, std::array<uint8_t, 5> manufacturer) {
   power_up_errors_.push_back({code, manufacturer});
@@ -134,6 +176,20 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   emcy_.set_enabled(false);  // nothing but the boot-up message before pre-operational
   pdo_.reset();
   sdo_.reset();
+  // A node-ID configured over LSS takes effect here, at reset communication (CiA 305).
+  if (const uint8_t id = lss_.activate_pending_node_id(); id != node_id()) adopt_node_id(id);
+  if (!configured()) {
+    // CiA 305: without a node-ID the device stays in NMT initialisation, silent but for
+    // the LSS slave, until a master configures one and switches it to waiting.
+    spdlog::info("no node-ID: waiting for an LSS master (identity serial number 0x{:08X})",
+                 options_.device.serial_number);
+    // A running device that lost its node-ID (0xFF configured over LSS) can no longer be
+    // reached by SDO or PDO: the application is told, as for NMT Stopped.
+    if (booted_ && app_) app_->state_changed(NmtState::Initialising, now_us);
+    return;
+  }
+  if (!booted_) reset_application = true;  // the first boot powers the application up
+  booted_ = true;
   if (reset_application) {
     load_parameters(0x1000, 0x9FFF, now_us);
     for (const auto& e : power_up_errors_) emcy_.report(e.code, error_bits::kGeneric, e.manufacturer, now_us);
@@ -144,10 +200,37 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   pdo_.mark_dirty();
   sdo_.reconfigure();  // 0x1201..0x1203 as stored (or configured)
   consumer_.reset();
+  guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
   sync_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
   send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
   enter(NmtState::PreOperational, now_us);
+}
+
+void CanopenNode::adopt_node_id(uint8_t id) {
+  spdlog::info("LSS: node-ID {} is now {}", node_id(), id);
+  options_.device.node_id = id;
+  // The COB-IDs that follow the node-ID, and the parameters stored for this one; both
+  // reach the dictionary with the reset that follows.
+  od::apply_node_id(dictionary_, id);
+  heartbeat_.set_node_id(id);
+  guarding_.set_node_id(id);
+  store_.set_file(parameter_file_for(options_));
+}
+
+void CanopenNode::on_lss_frame(const od::CanFrame& frame, uint64_t now_us) {
+  // The answer goes out before the next frame is read: back-to-back requests each get theirs.
+  LssSlave::Result r = lss_.on_frame(frame);
+  if (r.response) send(*r.response);
+  if (r.activate_bit_timing_delay_ms) {
+    const auto index = lss_.active_bit_timing();
+    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: the interface's bit rate is set outside "
+                 "stepnode (ip link)", index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms);
+  }
+  if (r.boot) {
+    spdlog::info("LSS: node-ID {} configured: reset communication and boot-up", lss_.pending_node_id());
+    initialise(false, now_us);
+  }
 }
 
 void CanopenNode::enter(NmtState next, uint64_t now_us) {
@@ -188,12 +271,25 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
 }
 
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
-  if (app_) app_->advance(now_us);
-  if (auto command = decode_nmt(frame, node_id())) {
-    handle_nmt(*command, now_us);
+  if (app_ && booted_) app_->advance(now_us);
+  if (frame.id == lss::kMasterToSlave) {
+    on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
     return;
   }
-  consumer_.on_frame(frame, now_us);  // error control runs in every state
+  // Without a node-ID only a broadcast reaches the node, and only a reset means anything
+  // in NMT initialisation: it applies a node-ID configured over LSS.
+  if (auto command = decode_nmt(frame, configured() ? node_id() : 0)) {
+    if (configured() || *command == NmtCommand::ResetNode || *command == NmtCommand::ResetCommunication)
+      handle_nmt(*command, now_us);
+    return;
+  }
+  if (!configured()) return;
+  // Error control runs in every state.
+  if (auto answer = guarding_.on_frame(frame, state_, now_us)) {
+    send(*answer);
+    return;
+  }
+  consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
   if (sync_.on_frame(frame, now_us)) {
@@ -209,9 +305,10 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
 }
 
 void CanopenNode::on_tick(uint64_t now_us) {
-  if (app_) app_->advance(now_us);
+  if (app_ && booted_) app_->advance(now_us);
   consumer_.on_tick(now_us);
   if (state_ == NmtState::Initialising) return;
+  guarding_.on_tick(now_us);
   heartbeat_.on_tick(state_, now_us);
   if (state_ == NmtState::Stopped) return;
   sdo_.on_tick(now_us);

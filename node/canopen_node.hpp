@@ -6,11 +6,15 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 
 #include "node/application.hpp"
 #include "node/emcy.hpp"
 #include "node/heartbeat.hpp"
+#include "node/lss_slave.hpp"
+#include "node/lss_store.hpp"
 #include "node/nmt.hpp"
+#include "node/node_guarding.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
 #include "node/sdo_server_channels.hpp"
@@ -22,8 +26,13 @@
 
 namespace stepnode::node {
 
+// Where NodeOptions::device.node_id came from. A node-ID an LSS master configured and had
+// stored wins over the configuration file's, never over the command line's (README, LSS).
+enum class NodeIdOrigin { CommandLine, ConfigFile, None };
+
 struct NodeOptions {
-  od::DeviceInfo device;
+  od::DeviceInfo device;  // node_id lss::kUnconfigured: none, the node waits for LSS
+  NodeIdOrigin node_id_origin = NodeIdOrigin::CommandLine;
   DeviceLayout layout;  // the profiles and axes (the PDO count follows)
   std::filesystem::path state_dir = ".";
   uint64_t sdo_timeout_us = 1'000'000;
@@ -38,7 +47,8 @@ class CanopenNode {
   CanopenNode(NodeOptions options, Send send);
   ~CanopenNode();
 
-  // Power-on: load stored parameters, send boot-up, enter pre-operational.
+  // Power-on: load stored parameters, send boot-up, enter pre-operational. Without a
+  // node-ID: nothing but the LSS slave, until a master gives it one (CiA 305).
   void start(uint64_t now_us);
   void on_frame(const od::CanFrame& frame, uint64_t now_us);
   void on_tick(uint64_t now_us);
@@ -52,7 +62,10 @@ class CanopenNode {
   void report_at_power_up(uint16_t code, std::array<uint8_t, 5> manufacturer);
 
   NmtState state() const { return state_; }
-  uint8_t node_id() const { return options_.device.node_id; }
+  uint8_t node_id() const { return options_.device.node_id; }  // lss::kUnconfigured: none
+  bool configured() const { return node_id() != lss::kUnconfigured; }
+  const LssSlave& lss() const { return lss_; }
+  const std::filesystem::path& lss_file() const { return lss_store_.file(); }
   const od::DeviceInfo& device_info() const { return options_.device; }
   od::Dictionary& dictionary() { return dictionary_; }
   EmcyProducer& emcy() { return emcy_; }
@@ -65,6 +78,8 @@ class CanopenNode {
  private:
   void install_service_hooks();
   void initialise(bool reset_application, uint64_t now_us);
+  void adopt_node_id(uint8_t node_id);
+  void on_lss_frame(const od::CanFrame& frame, uint64_t now_us);
   void load_parameters(uint16_t first, uint16_t last, uint64_t now_us);
   void enter(NmtState state, uint64_t now_us);
   void handle_nmt(NmtCommand command, uint64_t now_us);
@@ -72,6 +87,9 @@ class CanopenNode {
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);
   void send(const od::CanFrame& frame) { send_(frame); }
 
+  // Before options_: the node-ID it holds may be the one the node starts with.
+  LssStore lss_store_;
+  std::optional<LssStore::Contents> lss_stored_;
   NodeOptions options_;
   Send send_;
   Application* app_ = nullptr;
@@ -80,10 +98,13 @@ class CanopenNode {
   EmcyProducer emcy_;
   HeartbeatProducer heartbeat_;
   HeartbeatConsumer consumer_;
+  NodeGuarding guarding_;  // 0x100C, 0x100D; only while 0x1017 is 0
   SyncService sync_;
   PdoEngine pdo_;
   SdoServerChannels sdo_;  // 0x1200..0x1203
+  LssSlave lss_;
   NmtState state_ = NmtState::Initialising;
+  bool booted_ = false;  // the application was powered up (the first boot with a node-ID)
   struct PowerUpError {
     uint16_t code;
     std::array<uint8_t, 5> manufacturer;

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <toml++/toml.h>
 
+#include <charconv>
 #include <cstdlib>
 #include <map>
 #include <sstream>
@@ -40,9 +41,15 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
     if (!iface_given) cfg.iface = *v.value<std::string>();
   }
   if (auto v = t["node_id"]) {
+    // "none" (or 255, CiA 305's invalid node-ID): the node waits for an LSS master.
     auto id = v.value<int64_t>();
-    if (!id || *id < 1 || *id > 127) bad("node_id", "must be an integer 1..127");
-    if (!id_given) cfg.options.device.node_id = static_cast<uint8_t>(*id);
+    auto text = v.value<std::string>();
+    const bool none = (text && *text == "none") || (id && *id == lss::kUnconfigured);
+    if (!none && (!id || *id < 1 || *id > 127)) bad("node_id", "must be an integer 1..127, or \"none\" (255)");
+    if (!id_given) {
+      cfg.options.device.node_id = none ? lss::kUnconfigured : static_cast<uint8_t>(*id);
+      cfg.options.node_id_origin = none ? NodeIdOrigin::None : NodeIdOrigin::ConfigFile;
+    }
     id_set = true;
   }
   if (auto v = t["state_dir"]) {
@@ -128,9 +135,14 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   CLI::App app{"stepnode: a CANopen (CiA 301) stepper-motion node on a SocketCAN interface"};
   std::string config_file;
   std::string state_dir;
-  int node_id = 0;
+  std::string node_id;
+  std::string serial_number;
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
-  app.add_option("--node-id", node_id, "CANopen node id, 1..127");
+  app.add_option("--node-id", node_id,
+                 "CANopen node id, 1..127, or none (255): no id, the node waits for an LSS master "
+                 "(an id an LSS master stored is used then, else the config file's)");
+  app.add_option("--serial-number", serial_number,
+                 "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
   app.add_option("--config", config_file, "TOML config file (see README)");
   app.add_option("--state-dir", state_dir, "where stored parameters (0x1010) are kept");
   app.add_option("--tick-us", cfg.tick_us, "engine tick period in microseconds (100..100000)");
@@ -149,12 +161,42 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (!config_file.empty()) {
     if (!std::filesystem::is_regular_file(config_file))
       throw UsageError("config " + config_file + ": cannot read file");
-    id_known |= load_config_file(config_file, cfg, !cfg.iface.empty(), id_known, !state_dir.empty());
+    // "--node-id none" gives no id: the config file's applies (after one stored over LSS).
+    const bool id_given = id_known && node_id != "none" && node_id != "255";
+    id_known |= load_config_file(config_file, cfg, !cfg.iface.empty(), id_given, !state_dir.empty());
   }
   if (app.count("--node-id")) {
-    if (node_id < 1 || node_id > 127)
-      throw UsageError("--node-id " + std::to_string(node_id) + ": must be 1..127");
-    cfg.options.device.node_id = static_cast<uint8_t>(node_id);
+    int id = -1;
+    if (node_id == "none") {
+      id = lss::kUnconfigured;
+    } else {
+      auto [end, ec] = std::from_chars(node_id.data(), node_id.data() + node_id.size(), id);
+      if (ec != std::errc() || end != node_id.data() + node_id.size()) id = -1;
+    }
+    if (id != lss::kUnconfigured && (id < 1 || id > 127))
+      throw UsageError("--node-id " + node_id + ": must be 1..127, or none (255)");
+    if (id == lss::kUnconfigured) {
+      // The command line gives none: an id stored over LSS, else the config file's, applies.
+      if (cfg.options.node_id_origin == NodeIdOrigin::CommandLine) {
+        cfg.options.device.node_id = lss::kUnconfigured;
+        cfg.options.node_id_origin = NodeIdOrigin::None;
+      }
+    } else {
+      cfg.options.device.node_id = static_cast<uint8_t>(id);
+      cfg.options.node_id_origin = NodeIdOrigin::CommandLine;
+    }
+  }
+  if (app.count("--serial-number")) {
+    unsigned long long n = 0;
+    size_t used = 0;
+    try {
+      n = std::stoull(serial_number, &used, 0);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != serial_number.size() || n > 0xFFFFFFFFull || serial_number[0] == '-')
+      throw UsageError("--serial-number " + serial_number + ": must be an integer 0..4294967295 (or 0x...)");
+    cfg.options.device.serial_number = static_cast<uint32_t>(n);
   }
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
@@ -165,7 +207,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
     throw UsageError("--log-level " + cfg.log_level + ": must be one of trace, debug, info, warn, error, critical, off");
   if (cfg.print_eds) return cfg;
   if (cfg.iface.empty()) throw UsageError("--iface is required (e.g. --iface vcan0)");
-  if (!id_known) throw UsageError("--node-id is required (1..127)");
+  if (!id_known) throw UsageError("--node-id is required (1..127, or none for a node an LSS master configures)");
   return cfg;
 }
 

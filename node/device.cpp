@@ -85,22 +85,31 @@ void Device::state_changed(NmtState state, uint64_t now_us) {
   // NMT Stopped: no SDO and no PDO reach the axes any more, so the master has lost control
   // of them; they ramp down and latch %I8 exactly as for a lost master (README, "NMT
   // states and motion"). Pre-operational keeps SDO, and the axes keep their job.
-  if (state == NmtState::Stopped) {
-    spdlog::warn("NMT stopped: every moving axis ramps down");
+  // Initialising is only reported for a node that lost its node-ID over LSS: unreachable
+  // as well.
+  if (state == NmtState::Stopped || state == NmtState::Initialising) {
+    spdlog::warn("NMT {}: every moving axis ramps down", state == NmtState::Stopped ? "stopped" : "initialising (no node-ID)");
     master_lost(now_us);
   }
 }
 
 void Device::communication_error(CommunicationError error, uint8_t node, uint64_t now_us) {
   if (error == CommunicationError::HeartbeatLost && !is_master(node)) return;  // EMCY 0x8130 only
-  spdlog::warn("{}: every moving axis ramps down", error == CommunicationError::BusOff
-                                                       ? std::string("bus-off")
-                                                       : "master (node " + std::to_string(node) + ") lost");
+  // Life guarding is the guarding master's own check: its loss is the master's, like a lost
+  // heartbeat of the master (README, "Communication errors and NMT states").
+  spdlog::warn("{}: every moving axis ramps down",
+               error == CommunicationError::BusOff             ? std::string("bus-off")
+               : error == CommunicationError::LifeGuardingLost ? std::string("life guarding (the guarding master) lost")
+                                                               : "master (node " + std::to_string(node) + ") lost");
   master_lost(now_us);
 }
 
 void Device::heartbeat_recovered(uint8_t node, uint64_t now_us) {
   if (!is_master(node)) return;
+  for (auto& p : profiles_) p->master_back(now_us);
+}
+
+void Device::life_guarding_recovered(uint64_t now_us) {
   for (auto& p : profiles_) p->master_back(now_us);
 }
 

@@ -57,6 +57,7 @@ class Device final : private Application {
   void state_changed(NmtState state, uint64_t now_us) override;
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us) override;
   void heartbeat_recovered(uint8_t node, uint64_t now_us) override;
+  void life_guarding_recovered(uint64_t now_us) override;
 
   // 0x2F11: 0 makes every monitored node a master; otherwise only that node is.
   bool is_master(uint8_t node);

@@ -19,6 +19,8 @@ class HeartbeatProducer {
   // Sends the heartbeat now (state changes are confirmed at once) and restarts the period.
   void send_now(NmtState state, uint64_t now_us);
   void on_tick(NmtState state, uint64_t now_us);
+  // A node-ID configured over LSS, in effect from the reset communication that applies it.
+  void set_node_id(uint8_t node_id) { node_id_ = node_id; }
 
  private:
   od::Dictionary& dictionary_;

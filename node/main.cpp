@@ -68,8 +68,12 @@ int run(const node::NodeConfig& cfg) {
     device.on_tick(canio::EventLoop::now_us());
     can.flush();
   });
-  spdlog::info("node {} on {}, {} axes, parameters in {}", cfg.options.device.node_id, cfg.iface,
-               cfg.options.layout.axes, device.canopen().parameter_file().string());
+  if (device.canopen().configured())
+    spdlog::info("node {} on {}, {} axes, parameters in {}", device.canopen().node_id(), cfg.iface,
+                 cfg.options.layout.axes, device.canopen().parameter_file().string());
+  else
+    spdlog::info("node without a node-ID on {} (LSS-unconfigured), {} axes, LSS configuration in {}", cfg.iface,
+                 cfg.options.layout.axes, device.canopen().lss_file().string());
   device.start(canio::EventLoop::now_us());
   loop.run();
   spdlog::info("stopping");

@@ -1,14 +1,13 @@
 #include "node/parameter_store.hpp"
 
-#include <fcntl.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <charconv>
-#include <cstring>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
+
+#include "node/atomic_file.hpp"
 
 namespace stepnode::node {
 namespace {
@@ -51,17 +50,6 @@ bool from_hex(const std::string& text, od::Bytes& out) {
     unsigned v = 0;
     if (std::sscanf(text.c_str() + i, "%2x", &v) != 1) return false;
     out.push_back(static_cast<uint8_t>(v));
-  }
-  return true;
-}
-
-bool write_all(int fd, const std::string& data) {
-  size_t done = 0;
-  while (done < data.size()) {
-    ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    done += static_cast<size_t>(n);
   }
   return true;
 }
@@ -145,28 +133,10 @@ bool ParameterStore::write_file(const std::map<Key, od::Bytes>& values) const {
   char crc[32];
   std::snprintf(crc, sizeof crc, "%s%08x\n", std::string(kCrcPrefix).c_str(), crc32(text.str()));
   text << crc;
-  std::error_code ec;
-  std::filesystem::create_directories(file_.parent_path(), ec);
-  std::filesystem::path tmp = file_;
-  tmp += ".tmp";
-  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    spdlog::error("cannot save parameters: {}: {}", tmp.string(), std::strerror(errno));
+  std::string error;
+  if (!write_file_atomically(file_, text.str(), error)) {
+    spdlog::error("cannot save parameters: {}", error);
     return false;
-  }
-  bool ok = write_all(fd, text.str()) && ::fsync(fd) == 0;
-  ::close(fd);
-  if (!ok || std::rename(tmp.c_str(), file_.c_str()) != 0) {
-    spdlog::error("cannot save parameters: {}: {}", file_.string(), std::strerror(errno));
-    ::unlink(tmp.c_str());
-    return false;
-  }
-  // The rename itself must reach the disk: sync the directory.
-  int dir = ::open(file_.parent_path().empty() ? "." : file_.parent_path().c_str(),
-                   O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
   }
   return true;
 }

@@ -47,6 +47,8 @@ class ParameterStore {
   LoadReport load_into_dictionary(uint16_t first, uint16_t last);
 
   const std::filesystem::path& file() const { return file_; }
+  // The node-ID changed (LSS): the parameters stored for the new one apply from now on.
+  void set_file(std::filesystem::path file) { file_ = std::move(file); }
 
  private:
   struct Contents {

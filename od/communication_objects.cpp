@@ -1,6 +1,8 @@
 #include "od/communication_objects.hpp"
 
 #include <cstdio>
+#include <string>
+#include <string_view>
 
 #include "od/can_frame.hpp"
 #include "od/cob_id.hpp"
@@ -115,6 +117,13 @@ void add_heartbeat(Dictionary& od) {
     };
   }
   od.var(0x1017, "Producer heartbeat time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(1000));
+}
+
+void add_node_guarding(Dictionary& od) {
+  // CiA 301 7.5.2.11/12: guard time (ms) x life time factor = the node life time; 0 in
+  // either: no life guarding. Used only while the heartbeat producer time 0x1017 is 0.
+  od.var(0x100C, "Guard time", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+  od.var(0x100D, "Life time factor", DT::Unsigned8, AC::ReadWrite, {0});
 }
 
 void add_error_behaviour(Dictionary& od) {
@@ -233,12 +242,26 @@ void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigne
   add_error_history(od);
   add_sync_and_emcy(od, info);
   add_heartbeat(od);
+  add_node_guarding(od);
   add_error_behaviour(od);
   add_store_restore(od);
   add_sdo_server_parameters(od, info.node_id);
   for (unsigned n = 0; n < pdos && n < kMaxPdos; ++n) {
     add_pdo(od, PdoDirection::Receive, n, info.node_id);
     add_pdo(od, PdoDirection::Transmit, n, info.node_id);
+  }
+}
+
+void apply_node_id(Dictionary& od, uint8_t node_id) {
+  constexpr std::string_view kPrefix = "$NODEID+";
+  for (const auto& [index, unused] : od.objects()) {
+    (void)unused;
+    for (auto& [sub, e] : od.object(index)->entries) {
+      if (!e.eds_default.starts_with(kPrefix) || e.type != DataType::Unsigned32) continue;
+      const uint32_t offset =
+          static_cast<uint32_t>(std::stoul(e.eds_default.substr(kPrefix.size()), nullptr, 0));
+      e.default_value = encode<uint32_t>(offset + node_id);
+    }
   }
 }
 

@@ -53,6 +53,12 @@ constexpr uint32_t kLoadSignature = 0x64616F6C;  // "load"
 // consumer duplicates) installed as validate hooks. Services add their reactions on top.
 void build_communication_objects(Dictionary& dictionary, const DeviceInfo& info, unsigned pdos);
 
+// A new node-ID for the defaults that follow it (those whose EDS default is
+// "$NODEID+0x...": the EMCY, SDO and first four PDO COB-IDs). Only the default values
+// change: the node puts defaults and stored values back at its next reset communication,
+// which is when CiA 301 7.3.2.2.1 says a new node-ID takes effect.
+void apply_node_id(Dictionary& dictionary, uint8_t node_id);
+
 // True for identifiers CiA 301 7.3.5 reserves (never usable for a PDO, SYNC or EMCY).
 bool is_restricted_can_id(uint32_t can_id);
 

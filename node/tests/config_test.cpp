@@ -67,10 +67,54 @@ TEST_F(ConfigTest, GoodCommandLine) {
 }
 
 TEST_F(ConfigTest, NodeIdOutOfRange) {
-  for (const char* id : {"0", "128", "255", "-1", "1000"}) {
+  for (const char* id : {"0", "128", "254", "-1", "1000", "5x"}) {
     std::string msg = error_of({"--iface", "vcan0", "--node-id", id});
     EXPECT_TRUE(has(msg, "--node-id")) << msg;
     EXPECT_TRUE(has(msg, id)) << msg;
+  }
+}
+
+TEST_F(ConfigTest, NodeIdNoneStartsAnLssUnconfiguredNode) {
+  // "none" or 255 (CiA 305's invalid node-ID): the node waits for an LSS master.
+  for (const char* id : {"none", "255"}) {
+    NodeConfig cfg = parse({"--iface", "vcan0", "--node-id", id});
+    EXPECT_EQ(cfg.options.device.node_id, 0xFF) << id;
+    EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::None) << id;
+  }
+  NodeConfig cfg = parse({"--iface", "vcan0", "--node-id", "5"});
+  EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::CommandLine);
+  // The config file's id applies when the command line gives none (an LSS-stored one
+  // would come before it: the node decides that when it starts).
+  std::string path = config("node_id = 9\n");
+  cfg = parse({"--iface", "vcan0", "--node-id", "none", "--config", path});
+  EXPECT_EQ(cfg.options.device.node_id, 9);
+  EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::ConfigFile);
+  cfg = parse({"--iface", "vcan0", "--config", path});
+  EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::ConfigFile);
+  cfg = parse({"--iface", "vcan0", "--node-id", "7", "--config", path});
+  EXPECT_EQ(cfg.options.device.node_id, 7);
+  EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::CommandLine);
+  for (const char* none : {"node_id = \"none\"\n", "node_id = 255\n"}) {
+    cfg = parse({"--iface", "vcan0", "--config", config(none)});
+    EXPECT_EQ(cfg.options.device.node_id, 0xFF) << none;
+    EXPECT_EQ(cfg.options.node_id_origin, NodeIdOrigin::None) << none;
+  }
+}
+
+TEST_F(ConfigTest, SerialNumberFromTheCommandLineOrTheFile) {
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "7"}).options.device.serial_number, 7u);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "0x1A2B"}).options.device.serial_number,
+            0x1A2Bu);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "4294967295"}).options.device.serial_number,
+            0xFFFFFFFFu);
+  std::string path = config("serial_number = 12\n");
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path}).options.device.serial_number, 12u);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path, "--serial-number", "13"})
+                .options.device.serial_number,
+            13u);
+  for (const char* bad : {"-1", "4294967296", "x", "12abc", ""}) {
+    std::string msg = error_of({"--iface", "vcan0", "--node-id", "5", "--serial-number", bad});
+    EXPECT_TRUE(has(msg, "--serial-number")) << bad << " -> " << msg;
   }
 }
 

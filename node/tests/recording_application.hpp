@@ -14,8 +14,12 @@ struct RecordingApplication : Application {
   void state_changed(NmtState state, uint64_t) override { states.push_back(state); }
   void communication_error(CommunicationError error, uint8_t node, uint64_t) override {
     if (error == CommunicationError::HeartbeatLost) lost.push_back(node);
+    else if (error == CommunicationError::LifeGuardingLost) ++guarding_lost;
     else ++bus_offs;
   }
+  void life_guarding_recovered(uint64_t) override { ++guarding_recovered; }
+  int guarding_lost = 0;
+  int guarding_recovered = 0;
   int resets = 0;
   int bus_offs = 0;
   std::vector<NmtState> states;
