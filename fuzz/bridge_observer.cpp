@@ -7,6 +7,7 @@
 //   0 the node boots          1 N: its heartbeat state becomes N (the node's NMT state)
 //   2 N: N+1 ms pass          3 K V32: the node's axis values change, it sends TPDO K
 //   4 CODE16 REG M5: EMCY     5 ID16 LEN DATA..: any frame on the bus (the node answers
+//                               its SDO requests: a master may remap it under the observer)
 //   6 N: the node's SDO server misbehaves (silent, aborts, holds then releases)
 //   7 CLASS32 STATUS: a CAN error frame reaches the observer
 // The frames the observer sends reach the node, and its answers the observer, in order.
@@ -50,7 +51,7 @@ void send_tpdo(bridge::test::TestBus& bus, FakeNode& node, uint8_t k, uint32_t v
   if (!d.object(static_cast<uint16_t>(0x1800 + k)) || !d.object(static_cast<uint16_t>(0x1A00 + k))) return;
   // The values the TPDO may carry: an axis' status and positions, or a drive's statusword.
   const unsigned axis = k / 4;
-  if (d.find(static_cast<uint16_t>(0x2001 + 0x100 * axis), 0) && node.dictionary().object(0x2000))
+  if (d.find(horner::obj::index(axis, horner::obj::kStatusBits), 0))
     node.set_status(axis, static_cast<uint16_t>(value));
   if (d.find(static_cast<uint16_t>(0x6041 + 0x800 * axis), 0))
     d.put<uint16_t>(static_cast<uint16_t>(0x6041 + 0x800 * axis), 0, static_cast<uint16_t>(value));
