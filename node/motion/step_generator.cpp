@@ -14,6 +14,7 @@ Tick StepGenerator::interval_length(Rational z, int64_t k) const {
 
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
                           std::optional<int64_t> distance) {
+  peeked_ = kUnpeeked;  // the next step may move
   ramp_ = ramp;
   direction_ = direction >= 0 ? +1 : -1;
   distance_ = distance;
@@ -128,6 +129,7 @@ void StepGenerator::end_interval() {
 }
 
 bool StepGenerator::next(Step& out) {
+  peeked_ = kUnpeeked;  // the next step may move
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
     // Read each turn: reaching a velocity may move the motion to another grid (adopt).
@@ -172,10 +174,14 @@ bool StepGenerator::next(Step& out) {
 }
 
 std::optional<Tick> StepGenerator::peek() {
-  StepGenerator copy = *this;
-  Step s;
-  if (!copy.next(s)) return std::nullopt;
-  return s.time;
+  // Cached until the motion changes: the axes peek on every tick, and reaching the next
+  // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
+  if (peeked_ == kUnpeeked) {
+    StepGenerator copy = *this;
+    Step s;
+    peeked_ = copy.next(s) ? s.time : kNoStep;
+  }
+  return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
 }
 
 void StepGenerator::advance_to(Tick at) {
@@ -199,6 +205,7 @@ void StepGenerator::advance_to(Tick at) {
 }
 
 void StepGenerator::stop(Tick at) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   advance_to(at);
   stopping_ = true;
@@ -212,6 +219,7 @@ void StepGenerator::stop(Tick at) {
 }
 
 void StepGenerator::stop(Tick at, Rational decel) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   advance_to(at);
   ramp_.decel_ticks_per_level = decel;
@@ -225,6 +233,7 @@ void StepGenerator::stop(Tick at, Rational decel) {
 }
 
 void StepGenerator::halt(Tick at) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   t_ = std::max(t_, at);
   phase_ = MotionPhase::Idle;
@@ -236,6 +245,7 @@ void StepGenerator::halt(Tick at) {
 namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);
   then_ = std::move(then);
@@ -271,6 +281,7 @@ void StepGenerator::reached_velocity() {
 }
 
 void StepGenerator::set_level(Tick at, int64_t level) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   advance_to(at);
   level_ = std::max<int64_t>(level, 1);
@@ -283,6 +294,7 @@ void StepGenerator::set_level(Tick at, int64_t level) {
 }
 
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   advance_to(at);
   then_.reset();
@@ -305,6 +317,7 @@ void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
 }
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
+  peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   advance_to(at);
   distance_ = steps_done_ + std::max<int64_t>(steps, 0);

@@ -92,6 +92,10 @@ class StepGenerator {
   std::optional<int64_t> distance_;
   int64_t peak_level_ = 0;
   Tick t_ = 0;              // time of the last event (step or level change)
+  // peek()'s answer until the motion changes (a plain tick: the hot path copies the
+  // generator for every step): a step time, or one of these.
+  static constexpr Tick kUnpeeked = -2, kNoStep = -1;
+  Tick peeked_ = kUnpeeked;
   int64_t acc_ = 0;         // phase accumulator, 0 <= acc_ < phase_per_step
   int64_t level_ = 0;
   Tick interval_end_ = 0;   // end of the current ramp interval
