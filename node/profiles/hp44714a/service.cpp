@@ -130,7 +130,7 @@ void HpService::install_output_hooks(unsigned a) {
     this->hook(a, offset, sub, std::move(f));
   };
   uint16_t out = index(a, kOutput);
-  auto standby = [this, a, &ch, out](uint8_t mode, uint8_t sense) {
+  auto standby = [this, a, &ch](uint8_t mode, uint8_t sense) {
     return result(a, ch.standby(static_cast<hp::StandbyMode>(mode), sense != 0, now()));
   };
   hook(kOutput, hp44714a::output_sub::kStandbyMode, [this, out, standby](std::span<const uint8_t> d) {
