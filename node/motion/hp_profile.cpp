@@ -15,10 +15,16 @@ Conflict check_profile(const Profile& p) {
   if (!(p.min >= 0 && p.max >= 0 && p.slope >= 0 && p.last >= 0) || p.min > top || p.max > top ||
       p.slope > top_slope || (p.slope > 0 && p.slope < finest_slope))
     return Conflict::OutOfRange;
-  if (freq ? (p.last < kTimeResolutionS || p.last > kMaxWidthS) : (p.last < kMinPeriodS || p.last > kMaxWidthS))
+  // Appendix A: a FREQ pulse width of 1 us..65.535 ms; a WIDTH period of 100 us (10 kHz)
+  // up to the slowest rate the 2.5 uHz resolution gives (a period is not a width: 100 ms is
+  // a 10 Hz pulse train).
+  if (freq ? (p.last < kTimeResolutionS || p.last > kMaxWidthS)
+           : (p.last < kMinPeriodS || p.last * kRateResolutionHz > 1.0 + 1e-9))
     return Conflict::OutOfRange;
-  auto finer_than_resolution = [](double hz) { return hz > 0 && hz < kRateResolutionHz; };
-  if (freq && (finer_than_resolution(p.min) || finer_than_resolution(p.max))) return Conflict::OutOfRange;
+  // Above 0, nothing finer than the resolutions: 2.5 uHz for rates, 1 us for widths.
+  const double resolution = freq ? kRateResolutionHz : kTimeResolutionS;
+  auto finer_than_resolution = [&](double v) { return v > 0 && v < resolution; };
+  if (finer_than_resolution(p.min) || finer_than_resolution(p.max)) return Conflict::OutOfRange;
   if (p.min > p.max) return Conflict::MinAboveMax;
   if (p.min == 0 && p.max == 0 && p.slope == 0) return Conflict::AllZero;
   if (p.min == 0 && p.slope == 0) return Conflict::MinZeroSlopeZero;

@@ -659,6 +659,29 @@ TEST_F(HpChannel, AHornerStopEndsAnHpMoveAsAHalt) {
 
 // ---------------------------------------------------------------- WIDTH mode SUSTAIN (3-26)
 
+// Appendix A in WIDTH mode: "Pulse Rate 10 kHz maximum" (a period of 100 us at least) and
+// "Pulse Width 65.535 msec maximum, 1 usec resolution"; every bound.
+TEST_F(HpChannel, AppendixAWidthModeBounds) {
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 100e-6), now), Conflict::None);      // 10 kHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 99.9e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 10e-6), now), Conflict::OutOfRange);   // 100 kHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 100e-3), now), Conflict::None);      // 10 Hz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 400'000), now), Conflict::None);     // 2.5 uHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 400'001), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(1e-6, 65.535e-3, 1e-6, 100e-3), now), Conflict::None);  // widest
+  EXPECT_EQ(ch->profile(width(1e-6, 65.536e-3, 1e-6, 100e-3), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(0.5e-6, 10e-6, 1e-6, 100e-6), now), Conflict::OutOfRange);  // < 1 us
+  EXPECT_EQ(ch->profile(width(1e-6, 0.9e-6, 1e-6, 100e-6), now), Conflict::OutOfRange);
+  EXPECT_EQ(ch->profile(width(0, 10e-6, 1e-6, 100e-6), now), Conflict::None);
+  // A 100 ms period runs: 10 pulses a second.
+  ASSERT_EQ(ch->profile(width(1e-3, 50e-3, 1, 100e-3), now), Conflict::None);
+  ASSERT_EQ(ch->sustain(20e-3, true, now), Error::None);
+  wait(500);
+  int64_t p0 = position();
+  wait(1000);
+  EXPECT_EQ(position() - p0, 10);
+}
+
 TEST_F(HpChannel, WidthSustainRampsTheWidthAtAFixedPeriod) {
   // 3-28 example: PROFILE WIDTH 1E-3 10E-3 5E-3 20E-3, SUSTAIN 2E-3: 50 pulses/s, the width
   // ramps from 1 ms to 2 ms at 5 ms/s (0.2 s), then the interrupt.
