@@ -10,11 +10,10 @@ namespace stepnode::motion {
 StpcalcResult stpcalc(const StpcalcInput& in) {
   if (in.total && (*in.total < 0 || *in.total > 16'777'215))
     throw std::invalid_argument("total pulses = " + std::to_string(*in.total) + " is outside 0..16777215");
-  RampSpec ramp = horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);  // validates the rest
+  (void)horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);  // validates the rest
   StpcalcResult r;
   const double aq3 = static_cast<double>(in.aq3), aq4 = static_cast<double>(in.aq4),
                aq5 = static_cast<double>(in.aq5);
-  (void)ramp;
   // STPCALC's formulas as printed (B1.3.1/B1.3.2): an AQ6/AQ7 above the maximum useful value
   // gives STPCALC's longer figures; the module (the engine) ramps in the maximum useful time.
   r.z_a = horner_z(in.aq6, in.aq4, in.aq5);

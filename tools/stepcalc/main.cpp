@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    std::fprintf(stderr, "stepcalc: %s (usage: stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--plot FILE])\n", e.what());
+    std::fprintf(stderr, "stepcalc: %s (usage: stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--stpcalc-peak] [--plot FILE])\n", e.what());
     return 2;
   }
   if (!plot.empty() && !ends_with(plot, ".svg") && !ends_with(plot, ".png")) {
