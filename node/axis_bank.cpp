@@ -7,7 +7,7 @@ AxisBank::AxisBank(const DeviceLayout& layout) {
   for (unsigned a = 0; a < layout.axes; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
     if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
-    cores_.push_back(std::make_unique<motion::AxisCore>(motors, &machine_.emergency_stop));
+    cores_.push_back(std::make_unique<motion::AxisCore>(motors));
     axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, *cores_.back()));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) {
       for (const EventListener& l : listeners_) l(a, e);

@@ -24,8 +24,8 @@ Axis::Axis(AxisConfig config, AxisCore& core) : config_(config), core_(core) {
   power_up(0);
 }
 
-Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop)
-    : config_(config), own_core_(std::make_unique<AxisCore>(std::move(motors), estop)), core_(*own_core_) {
+Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors)
+    : config_(config), own_core_(std::make_unique<AxisCore>(std::move(motors))), core_(*own_core_) {
   saved_.resize(core_.motors());
   core_.listen(*this, this);
   set_config(config_);
@@ -74,7 +74,7 @@ bool Axis::origin_active() const {
   // The marker is wired to axis 1's home input (SPM30 4 FIND HOME, 5.1); the other motors
   // of a multiplexed axis keep their home switches.
   bool marker = rules_.marker_origin && core_.selected() == 0;
-  return marker ? motor().marker() : motor().home();
+  return marker ? inputs().marker() : inputs().home();
 }
 
 int64_t Axis::encoder_counts() const {
@@ -188,7 +188,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     move_target_steps_ = std::llabs(distance);
     move_done_steps_ = 0;
   }
-  index_was_active_ = motor().index();  // an index already on was received before the window
+  index_was_active_ = inputs().index();  // an index already on was received before the window
   if (distance == 0) {
     job_ = Job::None;
     notify(AxisEvent::MoveDone);
@@ -200,7 +200,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     latch(status::kEmergencyStop, now);
     return;
   }
-  bool toward_limit = direction > 0 ? motor().upper_limit() : motor().lower_limit();
+  bool toward_limit = direction > 0 ? inputs().upper_limit() : inputs().lower_limit();
   if (toward_limit) {
     if (config_.limit_started_moves) {
       // STP100 5.3.4: the move starts when the limit input is released.
@@ -285,7 +285,7 @@ void Axis::jog(int direction, Tick now) {
   auto ramp = ramp_from_words(now);
   if (!ramp) return;
   if (core_.estop_active()) return latch(status::kEmergencyStop, now);
-  if (direction > 0 ? motor().upper_limit() : motor().lower_limit())
+  if (direction > 0 ? inputs().upper_limit() : inputs().lower_limit())
     return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
   job_ = Job::Jog;
   move_ramp_ = *ramp;
@@ -442,13 +442,13 @@ void Axis::aborted(Tick when) {
 void Axis::after_step(const Step& step) {
   Tick t = step.time;
   if (job_ == Job::Move) ++move_done_steps_;
-  if (step.direction < 0 && motor().lower_limit()) {
+  if (step.direction < 0 && inputs().lower_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && limit_qualified_home()) {
       return home_event(t, /*at_limit=*/true);
     }
     return latch(status::kLowerLimit, t);
   }
-  if (step.direction > 0 && motor().upper_limit()) {
+  if (step.direction > 0 && inputs().upper_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && limit_qualified_home()) {
       return home_event(t, /*at_limit=*/true);
     }
@@ -464,7 +464,7 @@ void Axis::after_step(const Step& step) {
     // attain Running Velocity": the engine may also cruise below it (a short move capped at
     // STPCALC's peak), which does not open the window. The index counts when it "becomes
     // active" there: one already on when the window opened was "received before" it.
-    bool index = motor().index();
+    bool index = inputs().index();
     bool became_active = index && !index_was_active_;
     index_was_active_ = index;
     const StepGenerator& g = core_.generator();
@@ -501,7 +501,7 @@ void Axis::finish(Tick now) {
 }
 
 void Axis::poll(Tick now) {
-  bool still = job_direction_ > 0 ? motor().upper_limit() : motor().lower_limit();
+  bool still = job_direction_ > 0 ? inputs().upper_limit() : inputs().lower_limit();
   if (still) return;
   waiting_for_limit_release_ = false;
   start_motion(move_ramp_, job_direction_, move_target_steps_ - move_done_steps_, now);

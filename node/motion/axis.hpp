@@ -58,9 +58,9 @@ class Axis final : public FrontEnd, public AxisListener {
  public:
   // On a motion core shared with other front ends (the device's axes).
   Axis(AxisConfig config, AxisCore& core);
-  // On a core of its own: `motors` (one, or three for an SPM30 multiplexed axis) and the
-  // e-stop input `estop`.
-  Axis(AxisConfig config, std::vector<MotorPort*> motors, const bool* estop);
+  // On a core of its own: `motors` (one, or three for an SPM30 multiplexed axis; their
+  // inputs include the e-stop).
+  Axis(AxisConfig config, std::vector<MotorPort*> motors);
   Axis(const Axis&) = delete;
   Axis& operator=(const Axis&) = delete;
 
@@ -114,8 +114,8 @@ class Axis final : public FrontEnd, public AxisListener {
   enum class Job { None, Jog, Move, Home };
   enum class HomeStage { Seek, BackToOrigin, Clear, Approach };
 
-  MotorPort& motor() { return core_.motor(); }
-  const MotorPort& motor() const { return core_.motor(); }
+  // The selected motor's inputs, as the core applied its edges.
+  const InputLevels& inputs() const { return core_.inputs(); }
   bool origin_active() const;
   // The rules the module model and the settings give (set_config).
   struct Rules {

@@ -1,11 +1,13 @@
 #include "node/motion/axis_core.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace stepnode::motion {
 
-AxisCore::AxisCore(std::vector<MotorPort*> motors, const bool* estop) : motors_(std::move(motors)), estop_(estop) {
-  if (motors_.empty()) throw std::invalid_argument("an axis needs at least one motor");
+AxisCore::AxisCore(std::vector<MotorPort*> motors) {
+  if (motors.empty()) throw std::invalid_argument("an axis needs at least one motor");
+  for (MotorPort* m : motors) motors_.push_back({m, m->levels()});
 }
 
 void AxisCore::set_owner(FrontEnd* owner) {
@@ -15,7 +17,17 @@ void AxisCore::set_owner(FrontEnd* owner) {
 }
 
 void AxisCore::power_up(Tick now) {
+  now_ = std::max(now_, now);
+  // The inputs as they are now (a back end reports its levels at power-up); the edges
+  // before it are history.
+  InputEdge old;
+  for (Motor& m : motors_) {
+    while (m.port->next_edge(old)) {
+    }
+    m.levels = m.port->levels();
+  }
   generator_.halt(now);
+  replan(now);
   set_owner(nullptr);
   position_ = 0;
   selected_ = 0;
@@ -27,6 +39,7 @@ bool AxisCore::start(FrontEnd& by, const RampSpec& ramp, int direction, std::opt
   set_owner(&by);  // the hooks of this motion (a homing's next stage may differ)
   dir_high_ = direction > 0;
   generator_.start(ramp, now, direction, steps);
+  replan(now);
   if (first)
     for (const Listener& l : listeners_) l.listener->job_started(by, now);
   return true;
@@ -48,6 +61,7 @@ void AxisCore::release(const FrontEnd& by) {
 
 void AxisCore::abort(const FrontEnd* by, Tick at) {
   generator_.halt(at);
+  replan(at);
   FrontEnd* was = owner_;
   set_owner(nullptr);
   if (was && was != by) was->aborted(at);
@@ -56,6 +70,7 @@ void AxisCore::abort(const FrontEnd* by, Tick at) {
 void AxisCore::halt(const FrontEnd& by, Tick at) {
   if (owner_ != &by) return;
   generator_.halt(at);
+  replan(at);
   set_owner(nullptr);
   for (const Listener& l : listeners_) l.listener->job_halted(by, at);
 }
@@ -74,13 +89,59 @@ void AxisCore::watch_steps(const AxisListener& listener, bool on) {
   }
 }
 
+void AxisCore::watch_inputs(const AxisListener& listener, bool on) {
+  input_watchers_ = 0;
+  for (Listener& l : listeners_) {
+    if (l.listener == &listener) l.inputs = on;
+    input_watchers_ += l.inputs;
+  }
+}
+
+void AxisCore::replan(Tick at) {
+  horizon_ = port().horizon();
+  if (horizon_ <= 0) return;
+  port().cancel_after(at);
+  planner_ = generator_;
+  plan();
+}
+
+void AxisCore::plan() {
+  // The planner computes the same steps the core will take, up to the horizon; the port
+  // keeps them until their time.
+  const Tick until = now_ + horizon_;
+  StepPort& out = port();
+  for (;;) {
+    std::optional<Tick> t = planner_.peek();
+    if (!t || *t > until) return;
+    Step s;
+    planner_.next(s);
+    if (hooks_.pulse) out.queue_pulse(s.time, owner_->pulse(s));
+    else out.queue(s.time, s.direction);
+  }
+}
+
 void AxisCore::take(const Step& step) {
-  if (hooks_.pulse) motor().output_pulse(step.time, owner_->pulse(step));
-  else motor().step(step.time, step.direction);  // the step sink
+  StepPort& out = port();
+  if (horizon_ > 0) out.flush(step.time);  // the planner queued it: its time has come
+  else if (hooks_.pulse) out.output_pulse(step.time, owner_->pulse(step));
+  else out.step(step.time, step.direction);  // the step sink
+  if (hooks_.pulse) owner_->pulse_sent(step);
   position_ += step.direction;
+  read_inputs();  // the edges the step made (a switch reached) come before any rule
   if (step_watchers_ == 0) return;
   for (const Listener& l : listeners_)
     if (l.steps && (!owner_ || l.self != owner_)) l.listener->step_taken(step);
+}
+
+void AxisCore::read_inputs() {
+  InputEdge edge;
+  for (unsigned m = 0; m < motors_.size(); ++m)
+    while (motors_[m].port->next_edge(edge)) {
+      motors_[m].levels.set(edge.input, edge.active);
+      if (input_watchers_ == 0) continue;
+      for (const Listener& l : listeners_)
+        if (l.inputs) l.listener->input_changed(m, edge);
+    }
 }
 
 bool AxisCore::ramp_ends_later(Tick now) {
@@ -94,6 +155,9 @@ bool AxisCore::ramp_ends_later(Tick now) {
 }
 
 void AxisCore::advance_to(Tick now) {
+  now_ = std::max(now_, now);
+  read_inputs();  // what changed since the last advance (a switch moved, the e-stop)
+  if (horizon_ > 0) plan();
   for (;;) {
     const bool pending = waiting_;
     // SPM30 3.3.1 / STP100 4.2.1: the e-stop input stops motion at once. It is not a function
@@ -136,6 +200,10 @@ void AxisCore::advance_to(Tick now) {
     }
     if (owner_) owner_->after_step(step);
   }
+  // Every step up to `now` is out; the back ends' clocks are at `now` (the time a change
+  // made from outside before the next advance happened at).
+  for (Motor& m : motors_) m.port->flush(now);
+  if (horizon_ > 0) plan();
   for (const Listener& l : listeners_) l.listener->advanced(now);
 }
 

@@ -12,6 +12,13 @@
 //     of an aborted job is told (`FrontEnd::aborted`);
 //   - the e-stop input ends every job before its next step; the owner is told, then every
 //     listener (`AxisListener::emergency_stop`).
+//
+// Steps and inputs go through the motor's ports (node/motion/step_port.hpp, input_port.hpp).
+// With a horizon (StepPort::horizon) a second generator, the planner, runs ahead and queues
+// the steps up to that far ahead; the core itself takes each step when its time comes,
+// applies the input edges that fell before it, and runs the front ends' rules. A rule that
+// changes course takes the queued steps back (StepPort::cancel_after) and plans again from
+// the core's state, so the steps that go out are the same at any horizon.
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -37,10 +44,13 @@ class FrontEnd {
     bool before_step = false;  // before_step()
   };
   virtual Hooks hooks() const { return {}; }
-  // How the job's step leaves the outputs (HP PULSE SD|SS).
-  virtual OutputPulse pulse(const Step& step) { return OutputPulse{.step_direction = true,
-                                                                   .ndir_level = step.direction > 0,
-                                                                   .ndir_positive_level = true}; }
+  // How the job's step leaves the outputs (HP PULSE SD|SS). It may be asked ahead of the
+  // step's time (a port with a horizon) and for steps that are taken back: no side effects.
+  virtual OutputPulse pulse(const Step& step) const {
+    return OutputPulse{.step_direction = true, .ndir_level = step.direction > 0, .ndir_positive_level = true};
+  }
+  // The step went out as pulse(step) said (when its time came).
+  virtual void pulse_sent(const Step& step) { (void)step; }
   // A job that has not begun to step yet (STP100 5.3.4: a move toward an active limit
   // waits for its release; `AxisCore::claim`): the axis is busy, the e-stop ends it. While
   // it waits, `poll` runs before anything else in each round of `advance_to` and may start
@@ -73,21 +83,25 @@ class AxisListener {
   virtual void job_halted(const FrontEnd& owner, Tick when) { (void)owner; (void)when; }
   // The e-stop ended the motion (`was_moving`: steps were going out).
   virtual void emergency_stop(Tick when, bool was_moving) { (void)when; (void)was_moving; }
+  // An input of motor `motor` changed (the port's edge, applied in time order between the
+  // steps it fell between), while the listener watches inputs (`watch_inputs`).
+  virtual void input_changed(unsigned motor, const InputEdge& edge) { (void)motor; (void)edge; }
   // The end of every advance_to (statuses that follow the motion are published here).
   virtual void advanced(Tick now) { (void)now; }
 };
 
 class AxisCore {
  public:
-  // `motors`: one, or three for an SPM30 multiplexed axis (one stepped at a time);
-  // `estop` is the e-stop input (may be null).
-  AxisCore(std::vector<MotorPort*> motors, const bool* estop);
+  // `motors`: one, or three for an SPM30 multiplexed axis (one stepped at a time). The
+  // e-stop is an input of the motors' ports (the selected motor's is obeyed).
+  explicit AxisCore(std::vector<MotorPort*> motors);
 
   // Power-up: no job, no motion, position 0, the first motor selected. Owners are not told
   // (every front end has its own power-up).
   void power_up(Tick now);
 
-  // Takes every step due up to `now`, with the owner's rules, then tells the listeners.
+  // Takes every step due up to `now`, with the owner's rules and the input edges in time
+  // order, queues the steps up to the port's horizon, then tells the listeners.
   void advance_to(Tick now);
 
   // --- Jobs ----------------------------------------------------------------------------
@@ -108,23 +122,42 @@ class AxisCore {
   // The owner gives its job up without a motion_ended (the job ended in its rules).
   void release(const FrontEnd& by);
   // Decelerate whatever runs to the base velocity and stop (any front end may).
-  void stop(Tick at) { generator_.stop(at); }
+  void stop(Tick at) {
+    generator_.stop(at);
+    replan(at);
+  }
   // The same at another deceleration (ticks per level of the running grid).
-  void stop(Tick at, Rational decel) { generator_.stop(at, decel); }
+  void stop(Tick at, Rational decel) {
+    generator_.stop(at, decel);
+    replan(at);
+  }
   // End whatever runs at once; the owner, unless it is `by`, is told (FrontEnd::aborted).
   void abort(const FrontEnd* by, Tick at);
   // The owner stops its own job at once (no ramp, no motion_ended); listeners are told.
   void halt(const FrontEnd& by, Tick at);
   // Stop the generator at once but keep the job (homing's stop on the origin, in
   // after_step: the job goes on or motion_ended follows).
-  void halt_motion(Tick at) { generator_.halt(at); }
+  void halt_motion(Tick at) {
+    generator_.halt(at);
+    replan(at);
+  }
   // The running motion's velocity and grid (HP SUSTAIN) and end point (indexed move).
   void change_velocity(Tick at, int64_t level, std::optional<RampSpec> then = std::nullopt) {
     generator_.change_velocity(at, level, std::move(then));
+    replan(at);
   }
-  void regrid(Tick at, const RampSpec& ramp) { generator_.regrid(at, ramp); }
-  void set_level(Tick at, int64_t level) { generator_.set_level(at, level); }
-  void retarget(Tick at, int64_t steps, const RampSpec& ramp) { generator_.retarget(at, steps, ramp); }
+  void regrid(Tick at, const RampSpec& ramp) {
+    generator_.regrid(at, ramp);
+    replan(at);
+  }
+  void set_level(Tick at, int64_t level) {
+    generator_.set_level(at, level);
+    replan(at);
+  }
+  void retarget(Tick at, int64_t steps, const RampSpec& ramp) {
+    generator_.retarget(at, steps, ramp);
+    replan(at);
+  }
 
   // --- State ---------------------------------------------------------------------------
   const StepGenerator& generator() const { return generator_; }
@@ -135,12 +168,15 @@ class AxisCore {
   // The DIR output's level: set at the start of every motion (STP100 5.3.5).
   bool dir_output_high() const { return dir_high_; }
   void set_dir_output(bool high) { dir_high_ = high; }
-  bool estop_active() const { return estop_ && *estop_; }
+  bool estop_active() const { return motors_[selected_].levels.emergency_stop(); }
 
-  // The motor stepped and sensed (SPM30 3.2 SELECT AXIS picks one of three).
-  MotorPort& motor() { return *motors_[selected_]; }
-  const MotorPort& motor() const { return *motors_[selected_]; }
-  const MotorPort& motor(unsigned n) const { return *motors_.at(n); }
+  // The inputs of the motor stepped and sensed, as of the last edge the core applied (at
+  // every step, and at the start of every advance_to); `inputs(n)`: motor n's.
+  const InputLevels& inputs() const { return motors_[selected_].levels; }
+  const InputLevels& inputs(unsigned n) const { return motors_.at(n).levels; }
+  // The motor stepped and sensed (SPM30 3.2 SELECT AXIS picks one of three): its encoder.
+  const MotorPort& motor() const { return *motors_[selected_].port; }
+  const MotorPort& motor(unsigned n) const { return *motors_.at(n).port; }
   unsigned motors() const { return static_cast<unsigned>(motors_.size()); }
   unsigned selected() const { return selected_; }
   void select(unsigned n) { selected_ = n; }
@@ -149,15 +185,29 @@ class AxisCore {
   void listen(AxisListener& listener, const FrontEnd* self = nullptr) { listeners_.push_back({&listener, self}); }
   // Whether `listener` is given every step (step_taken); off, a step costs it nothing.
   void watch_steps(const AxisListener& listener, bool on);
+  // Whether `listener` is given every input edge (input_changed).
+  void watch_inputs(const AxisListener& listener, bool on);
 
  private:
   void take(const Step& step);
+  void read_inputs();
   void emergency_stop(Tick now);
   bool ramp_ends_later(Tick now);
+  StepPort& port() { return *motors_[selected_].port; }
+  // The course changed at `at`: the steps queued after it are taken back and the planner
+  // starts again from the core's state.
+  void replan(Tick at);
+  void plan();
 
-  std::vector<MotorPort*> motors_;
-  const bool* estop_;
-  StepGenerator generator_;
+  struct Motor {
+    MotorPort* port;
+    InputLevels levels;
+  };
+  std::vector<Motor> motors_;
+  StepGenerator generator_;  // the job's state at the last step taken
+  StepGenerator planner_;    // with a horizon: runs ahead of generator_, queuing steps
+  Tick horizon_ = 0;
+  Tick now_ = 0;  // the latest advance_to
   void set_owner(FrontEnd* owner);
 
   FrontEnd* owner_ = nullptr;
@@ -167,9 +217,11 @@ class AxisCore {
     AxisListener* listener;
     const FrontEnd* self;
     bool steps = false;
+    bool inputs = false;
   };
   std::vector<Listener> listeners_;
   unsigned step_watchers_ = 0;
+  unsigned input_watchers_ = 0;
   int32_t position_ = 0;
   bool dir_high_ = false;
   unsigned selected_ = 0;

@@ -26,7 +26,7 @@ void Axis::find_home(int direction, Tick now) {
   // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
   // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
   // the limit is already reached and the search goes on from step 4.
-  if (direction > 0 ? motor().upper_limit() : motor().lower_limit()) {
+  if (direction > 0 ? inputs().upper_limit() : inputs().lower_limit()) {
     if (!limit_qualified_home())
       return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
     job_direction_ = direction;

@@ -12,33 +12,37 @@ Tick seconds_to_ticks(double s) { return static_cast<Tick>(std::llround(s * stat
 
 }  // namespace
 
-Channel::Channel(AxisCore& core, const MotorPort& inputs) : core_(core), inputs_(inputs) {
+Channel::Channel(AxisCore& core) : core_(core) {
   core_.listen(*this);
+  core_.watch_inputs(*this, true);  // HALT acts whatever runs
   power_up(0);
 }
 
-OutputPulse Channel::pulse(const Step& s) {
+OutputPulse Channel::pulse(const Step& s) const {
   // PULSE SD|SS: the output the pulse appears at and the levels (3-7, Figure 3-1).
-  last_pulse_ = pulse_for(pulse_, s.direction);
-  ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
+  const Pulse p = pulse_for(pulse_, s.direction);
   OutputPulse out;
   out.step_direction = pulse_.mode == PulseMode::StepDirection;
-  out.on_ndir = last_pulse_.output == Output::Ndir;
-  out.ndir_level = last_pulse_.ndir_level;
+  out.on_ndir = p.output == Output::Ndir;
+  out.ndir_level = p.ndir_level;
   out.ndir_positive_level = pulse_.ndir_high;
-  out.pstp_level = last_pulse_.pstp_level;
+  out.pstp_level = p.pstp_level;
   return out;
 }
 
-void Channel::step_taken(const Step&) {
+void Channel::pulse_sent(const Step& s) {
+  last_pulse_ = pulse_for(pulse_, s.direction);
+  ++pulse_count_[static_cast<unsigned>(last_pulse_.output)];
+}
+
+void Channel::input_changed(unsigned motor, const InputEdge& edge) {
+  if (motor != core_.selected()) return;
+  if (edge.input == Input::Halt) return set_halt_input(edge.active, edge.time);
   // QINDEX ONCE: counting begins on the leading edge of the first index pulse (3-21).
-  bool m = inputs_.marker();
-  if (m && !marker_was_ && q_waiting_for_index_) {
-    q_offset_ = inputs_.encoder_count();
+  if (edge.input == Input::Marker && edge.active && q_waiting_for_index_) {
+    q_offset_ = core_.motor().encoder_count();
     q_waiting_for_index_ = q_frozen_ = false;
   }
-  marker_was_ = m;
-  core_.watch_steps(*this, q_waiting_for_index_);
 }
 
 void Channel::start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at) {
@@ -73,10 +77,9 @@ void Channel::power_up(Tick now) {
   trigger_time_.reset();
   first_step_.reset();
   awaiting_first_step_ = false;
-  q_offset_ = inputs_.encoder_count();
+  q_offset_ = core_.motor().encoder_count();
   q_waiting_for_index_ = q_frozen_ = false;
-  marker_was_ = inputs_.marker();
-  core_.watch_steps(*this, false);
+  halt_level_high_ = core_.inputs().halt_high();
 }
 
 Error Channel::accept(Error e) {
@@ -384,8 +387,8 @@ bool Channel::limit_active(int direction) const {
   // The simulated limit switches close to PCOM when reached (Figure 3-4): the input is LO
   // there, HI (pulled up) elsewhere. HARDLIM sets which level means "limit reached"; only
   // motion toward a reached limit is prohibited (Command Summary: HARDLIM).
-  if (direction > 0) return (!inputs_.upper_limit()) == plim_high_;
-  return (!inputs_.lower_limit()) == nlim_high_;
+  if (direction > 0) return (!core_.inputs().upper_limit()) == plim_high_;
+  return (!core_.inputs().lower_limit()) == nlim_high_;
 }
 
 void Channel::set_halt_input(bool level_high, Tick now) {
@@ -498,26 +501,24 @@ void Channel::qindex(QIndexMode mode) {
     case QIndexMode::Off: q_waiting_for_index_ = false; q_frozen_ = false; break;
     case QIndexMode::Once:
       // Reset now; counting begins on the first index pulse, later ones are ignored.
-      q_offset_ = inputs_.encoder_count();
+      q_offset_ = core_.motor().encoder_count();
       q_frozen_ = q_waiting_for_index_ = true;
-      marker_was_ = inputs_.marker();
       break;
     case QIndexMode::Sgl:
       // Reset now and count at once; QINDEX then returns to OFF.
-      q_offset_ = inputs_.encoder_count();
+      q_offset_ = core_.motor().encoder_count();
       q_frozen_ = q_waiting_for_index_ = false;
       mode = QIndexMode::Off;
       break;
   }
-  // QINDEX ONCE watches every step (whoever moves the axis) for the index's leading edge.
-  core_.watch_steps(*this, q_waiting_for_index_);
+  // QINDEX ONCE waits for the index's leading edge (input_changed), whoever moves the axis.
   qindex_ = mode;
 }
 
 int32_t Channel::quadrature_count() const {
   if (q_frozen_) return 0;
   // "will rollover from the maximum positive number to the maximum negative number"
-  return static_cast<int32_t>(static_cast<uint32_t>(inputs_.encoder_count() - q_offset_));
+  return static_cast<int32_t>(static_cast<uint32_t>(core_.motor().encoder_count() - q_offset_));
 }
 
 }  // namespace stepnode::motion::hp

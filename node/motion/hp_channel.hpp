@@ -22,7 +22,7 @@ class Channel final : public FrontEnd, public AxisListener {
  public:
   // `core`: the axis this channel drives. `inputs`: its motor's inputs (limits, marker,
   // encoder counts) as the HP terminal module sees them.
-  Channel(AxisCore& core, const MotorPort& inputs);
+  explicit Channel(AxisCore& core);
   Channel(const Channel&) = delete;
   Channel& operator=(const Channel&) = delete;
 
@@ -56,7 +56,6 @@ class Channel final : public FrontEnd, public AxisListener {
   // ---- inputs from outside the channel
   void sync(Tick now);            // the CANopen SYNC: TRIG SYS
   void chan0_triggered(Tick now);  // channel 0 of this node was triggered: TRIG CHAN0
-  void set_halt_input(bool level_high, Tick now);
   void set_test_jumper(bool set) { test_jumper_ = set; }
   // Starts what is due (DELAY, STANDBY AUTO power-off) and brings the axis to `now`.
   void advance(Tick now);
@@ -120,22 +119,25 @@ class Channel final : public FrontEnd, public AxisListener {
   void interrupt(uint8_t event, Tick at);
   bool limit_active(int direction) const;
   bool halt_active() const;
+  // The HALT input changed (its edge, input_changed): a halt when it now reads active.
+  void set_halt_input(bool level_high, Tick now);
   // FrontEnd: the channel's own jobs.
   Hooks hooks() const override { return {.pulse = true}; }
-  OutputPulse pulse(const Step& step) override;
+  OutputPulse pulse(const Step& step) const override;
+  void pulse_sent(const Step& step) override;
   void after_step(const Step& step) override;
   void motion_ended(Tick when) override { ended(/*completed=*/true, when); }
   void aborted(Tick when) override { ended(/*completed=*/false, when); }
   void ended(bool completed, Tick at);
-  // AxisListener: the quadrature index watch sees every step, whoever moves the axis.
-  void step_taken(const Step& step) override;
+  // AxisListener: the HALT switch and the quadrature index watch (the marker's leading
+  // edge, whoever moves the axis).
+  void input_changed(unsigned motor, const InputEdge& edge) override;
   void start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at);
   void check_sustain_reached(Tick now);
   void width_advance(Tick now);
   Tick delay_ticks() const;
 
   AxisCore& core_;
-  const MotorPort& inputs_;
   // Settings.
   Profile profile_;
   PositionCounter position_;
@@ -176,7 +178,6 @@ class Channel final : public FrontEnd, public AxisListener {
   // Quadrature counter: counts = encoder - q_offset_; QINDEX ONCE waits for the index.
   int64_t q_offset_ = 0;
   bool q_waiting_for_index_ = false, q_frozen_ = false;
-  bool marker_was_ = false;
   uint64_t pulse_count_[2] = {0, 0};
   Pulse last_pulse_;
 };

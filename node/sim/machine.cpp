@@ -1,5 +1,8 @@
 #include "node/sim/machine.hpp"
 
+#include <algorithm>
+#include <limits>
+
 namespace stepnode::sim {
 namespace {
 
@@ -12,9 +15,29 @@ int64_t floor_mod(int64_t a, int64_t b) { return a - floor_div(a, b) * b; }
 
 }  // namespace
 
+AxisMachine::AxisMachine(AxisMachineConfig config) : config_(config) {
+  reported_ = sensed();
+  find_steady_range();
+  changed_ = false;
+}
+
 void AxisMachine::step(motion::Tick time, int direction) {
+  steps_.went_out(time, direction);
+  move(time, direction);
+}
+
+void AxisMachine::flush(motion::Tick until) {
+  while (steps_.due(until)) {
+    motion::StepQueue::Entry e = steps_.pop();
+    move(e.time, e.direction);
+  }
+  clock_ = std::max(clock_, until);
+}
+
+void AxisMachine::move(motion::Tick time, int direction) {
   ++pulses_;
   last_step_time_ = time;
+  clock_ = std::max(clock_, time);
   if (trace_) [[unlikely]] record(time, direction);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
@@ -23,11 +46,90 @@ void AxisMachine::step(motion::Tick time, int direction) {
   if (config_.stall_above && next > *config_.stall_above) return;  // jammed
   if (config_.stall_below && next < *config_.stall_below) return;
   position_ = next;
+  if (position_ < steady_low_ || position_ > steady_high_) [[unlikely]] sense(time);
 }
 
-// Out of line: the hot path of step() stays as small as it was without a trace.
+// Out of line: the hot path of move() stays as small as it was without a trace.
 __attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction) {
   trace_->push_back({time, direction >= 0 ? +1 : -1});
+}
+
+motion::InputLevels AxisMachine::sensed() const {
+  using motion::Input;
+  motion::InputLevels l;
+  l.set(Input::Home, home());
+  l.set(Input::LowerLimit, lower_limit());
+  l.set(Input::UpperLimit, upper_limit());
+  l.set(Input::Index, index());
+  l.set(Input::Marker, marker());
+  l.set(Input::EmergencyStop, estop_);
+  l.set(Input::Halt, halt_high_);
+  return l;
+}
+
+void AxisMachine::sense(motion::Tick time) {
+  const motion::InputLevels now = sensed();
+  const uint8_t changed = now.active ^ reported_.active;
+  for (uint8_t bit = 1; bit != 0 && bit <= changed; bit = static_cast<uint8_t>(bit << 1))
+    if (changed & bit) {
+      const auto input = static_cast<motion::Input>(bit);
+      edges_.push_back({time, input, now.is(input)});
+    }
+  reported_ = now;
+  find_steady_range();
+}
+
+void AxisMachine::find_steady_range() {
+  // The positions around the present one at which no switch of the position changes:
+  // within them a step needs no look at the inputs.
+  int64_t low = std::numeric_limits<int64_t>::min(), high = std::numeric_limits<int64_t>::max();
+  const int64_t p = position_;
+  auto cam = [&](const std::optional<Cam>& c) {
+    if (!c) return;
+    if (c->contains(p)) {
+      low = std::max(low, c->position);
+      high = std::min(high, c->position + c->width - 1);
+    } else if (p < c->position) {
+      high = std::min(high, c->position - 1);
+    } else {
+      low = std::max(low, c->position + c->width);
+    }
+  };
+  cam(config_.home);
+  cam(config_.index);
+  if (config_.lower_limit) {
+    if (p <= *config_.lower_limit) high = std::min(high, *config_.lower_limit);
+    else low = std::max(low, *config_.lower_limit + 1);
+  }
+  if (config_.upper_limit) {
+    if (p >= *config_.upper_limit) low = std::max(low, *config_.upper_limit);
+    else high = std::min(high, *config_.upper_limit - 1);
+  }
+  const int64_t rev = config_.steps_per_rev;
+  if (config_.encoder == EncoderKind::Quadrature && rev > 0 && config_.marker_width > 0 &&
+      config_.marker_width < rev) {
+    const int64_t into = floor_mod(p - config_.marker_offset, rev), begin = p - into;
+    if (into < config_.marker_width) {
+      low = std::max(low, begin);
+      high = std::min(high, begin + config_.marker_width - 1);
+    } else {
+      low = std::max(low, begin + config_.marker_width);
+      high = std::min(high, begin + rev - 1);
+    }
+  }
+  steady_low_ = low;
+  steady_high_ = high;
+}
+
+bool AxisMachine::next_edge(motion::InputEdge& edge) {
+  if (changed_) {  // a change from outside: look at every input now
+    changed_ = false;
+    sense(clock_);
+  }
+  if (edges_.empty()) return false;
+  edge = edges_.front();
+  edges_.pop_front();
+  return true;
 }
 
 int64_t AxisMachine::encoder_counts_per_rev() const {

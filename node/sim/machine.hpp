@@ -2,12 +2,15 @@
 // (unless a fault says otherwise), switches and an encoder that are pure functions of the
 // mechanical position, so the engine knows the exact step at which any input changes.
 #pragma once
+#include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <vector>
 
 #include "node/motion/encoder_kind.hpp"
 #include "node/motion/motor_port.hpp"
+#include "node/motion/step_queue.hpp"
 
 namespace stepnode::sim {
 
@@ -45,25 +48,57 @@ struct TracedStep {
 
 class AxisMachine : public motion::MotorPort {
  public:
-  explicit AxisMachine(AxisMachineConfig config = {}) : config_(config) {}
+  explicit AxisMachine(AxisMachineConfig config = {});
 
-  // One step pulse from the drive (+1 up, -1 down). The motor follows unless stalled or
-  // the pulse is one of the missed ones.
+  // --- The step port (motion::StepPort) --------------------------------------------
+  // Steps are queued up to `horizon` ticks ahead of their time (0, the default: each is
+  // given as it falls due) and move the motor when the core flushes them.
+  motion::Tick horizon() const override { return horizon_; }
+  void set_horizon(motion::Tick ticks) { horizon_ = ticks; }
+  void queue(motion::Tick time, int direction) override { steps_.push(time, direction); }
+  void flush(motion::Tick until) override;
+  void cancel_after(motion::Tick after) override { steps_.cancel_after(after); }
+  std::optional<int64_t> position_at(motion::Tick time) const override { return steps_.position_at(time); }
+  std::size_t queued() const { return steps_.queued(); }
+
+  // One step pulse from the drive at its time (+1 up, -1 down). The motor follows unless
+  // stalled or the pulse is one of the missed ones.
   void step(motion::Tick time, int direction) override;
-  void step(int direction) { step(last_step_time_, direction); }
+  void step(int direction) { step(clock_, direction); }
   // External force: the load moved without steps.
-  void displace(int64_t steps) { position_ += steps; }
+  void displace(int64_t steps) {
+    position_ += steps;
+    changed_ = true;
+  }
   // Motor power (the drive's standby input): an unpowered motor holds no torque, so a
   // pulse it receives moves nothing (HP 44714A STANDBY ON, 3-13).
   void set_powered(bool powered) { powered_ = powered; }
   bool powered() const { return powered_; }
 
+  // --- The inputs (motion::InputPort) ----------------------------------------------
+  // Edges carry the tick of the step that moved the load across a switch's edge; a change
+  // made from outside (a switch moved, the load displaced, the e-stop pressed) carries the
+  // back end's clock, the latest flush or step.
+  motion::InputLevels levels() override { return sensed(); }
+  bool next_edge(motion::InputEdge& edge) override;
   int64_t position() const { return position_; }
-  bool home() const override { return config_.home && config_.home->contains(position_); }
-  bool index() const override { return config_.index && config_.index->contains(position_); }
-  bool lower_limit() const override { return config_.lower_limit && position_ <= *config_.lower_limit; }
-  bool upper_limit() const override { return config_.upper_limit && position_ >= *config_.upper_limit; }
-  bool marker() const override;
+  bool home() const { return config_.home && config_.home->contains(position_); }
+  bool index() const { return config_.index && config_.index->contains(position_); }
+  bool lower_limit() const { return config_.lower_limit && position_ <= *config_.lower_limit; }
+  bool upper_limit() const { return config_.upper_limit && position_ >= *config_.upper_limit; }
+  bool marker() const;
+  // The e-stop input (the machine's, shared by its axes: Machine::set_emergency_stop) and
+  // the HALT switch input's level (HIGH: open, pulled up).
+  void set_emergency_stop(bool active) {
+    estop_ = active;
+    changed_ = true;
+  }
+  bool emergency_stop() const { return estop_; }
+  void set_halt_input(bool high) {
+    halt_high_ = high;
+    changed_ = true;
+  }
+  bool halt_input_high() const { return halt_high_; }
   // Encoder counts as the input hardware sees them: every edge of A and B for quadrature
   // (4 per line; the module decides how many it counts), 1 per line for up/down; 0 without.
   int64_t encoder_count() const override;
@@ -74,7 +109,11 @@ class AxisMachine : public motion::MotorPort {
   void trace_into(std::vector<TracedStep>* trace) { trace_ = trace; }
   motion::Tick last_step_time() const { return last_step_time_; }
 
-  AxisMachineConfig& config() { return config_; }
+  // The configuration; changing it through here is a change of the inputs from outside.
+  AxisMachineConfig& config() {
+    changed_ = true;
+    return config_;
+  }
   const AxisMachineConfig& config() const { return config_; }
 
  private:
@@ -82,15 +121,39 @@ class AxisMachine : public motion::MotorPort {
   int64_t position_ = 0;
   uint64_t pulses_ = 0;
   motion::Tick last_step_time_ = 0;
+  motion::Tick clock_ = 0;  // the back end's time: the latest step or flush
+  motion::Tick horizon_ = 0;
   bool powered_ = true;
+  bool estop_ = false;
+  bool halt_high_ = true;
+  motion::StepQueue steps_;
   std::vector<TracedStep>* trace_ = nullptr;
+  // The inputs: the levels last reported, the positions between which none of the
+  // position's switches changes (so a step costs two comparisons), the edges not read.
+  motion::InputLevels reported_;
+  int64_t steady_low_ = 0, steady_high_ = -1;
+  bool changed_ = true;
+  std::deque<motion::InputEdge> edges_;
+
+  void move(motion::Tick time, int direction);
   void record(motion::Tick time, int direction);
+  motion::InputLevels sensed() const;
+  void sense(motion::Tick time);
+  void find_steady_range();
 };
 
 // The whole machine: the axes and the inputs they share.
 struct Machine {
   std::vector<AxisMachine> axes;
-  bool emergency_stop = false;  // the e-stop input is active
+  // The e-stop input: one switch, wired to every axis.
+  void set_emergency_stop(bool active) {
+    emergency_stop_ = active;
+    for (AxisMachine& a : axes) a.set_emergency_stop(active);
+  }
+  bool emergency_stop() const { return emergency_stop_; }
+
+ private:
+  bool emergency_stop_ = false;
 };
 
 }  // namespace stepnode::sim

@@ -46,9 +46,8 @@ Row measure(double rate, double slope) {
   sim::AxisMachineConfig m;
   m.encoder = sim::EncoderKind::None;
   RecordingMotor motor(m);
-  bool estop = false;
-  Axis axis(AxisConfig{}, {&motor}, &estop);
-  hp::Channel ch(axis.core(), motor);
+  Axis axis(AxisConfig{}, {&motor});
+  hp::Channel ch(axis.core());
   Tick now = 0;
   ch.profile(hp::Profile{hp::ProfileMode::Freq, 0, 10'000, slope, 1e-6}, now);
   ch.sustain(rate, true, now);

@@ -12,6 +12,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
@@ -29,7 +30,8 @@ class AxisCommands : public ::testing::Test {
   }
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = plain()) {
     motors.assign(1, sim::AxisMachine(m));
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]}, &estop);
+    estop.wire({&motors[0]});
+    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
     axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
     now = 0;
     held = 0;
@@ -104,7 +106,7 @@ class AxisCommands : public ::testing::Test {
   }
 
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   std::vector<AxisEvent> events;
   Tick now = 0;

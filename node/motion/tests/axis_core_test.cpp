@@ -9,6 +9,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -31,8 +32,8 @@ RampSpec constant(int64_t steps_per_s) { return horner_ramp(600, steps_per_s, st
 class AxisCoreTest : public ::testing::Test {
  protected:
   sim::AxisMachine motor;
-  bool estop = false;
-  AxisCore core{{&motor}, &estop};
+  sim::EStopSwitch estop{{&motor}};
+  AxisCore core{{&motor}};
   Recorder a, b;
   void SetUp() override {
     core.listen(a);

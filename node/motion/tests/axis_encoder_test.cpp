@@ -10,6 +10,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -46,7 +47,8 @@ class AxisEncoder : public ::testing::Test {
   }
   void build(AxisConfig c = config(), sim::AxisMachineConfig m = machine()) {
     motors.assign(1, sim::AxisMachine(m));
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]}, &estop);
+    estop.wire({&motors[0]});
+    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
     axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
     now = 0;
     held = 0;
@@ -102,7 +104,7 @@ class AxisEncoder : public ::testing::Test {
   }
 
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   std::vector<AxisEvent> events;
   Tick now = 0;

@@ -9,6 +9,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -27,7 +28,8 @@ class AxisHoming : public ::testing::Test {
   }
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) {
     motors.assign(1, sim::AxisMachine(m));
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]}, &estop);
+    estop.wire({&motors[0]});
+    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
     now = 0;
     held = 0;
     axis->write_commands(command::kClearErrors, now);
@@ -96,7 +98,7 @@ class AxisHoming : public ::testing::Test {
   }
 
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   Tick now = 0;
   uint16_t held = 0;
@@ -172,6 +174,7 @@ TEST_F(AxisHoming, Spm30_4_FindHomeUp_FromAboveTheCamFindsNothingAndHitsTheLimit
 
 TEST_F(AxisHoming, Spm30_4_FindHome_StartingOnTheCamBacksOffAndComesBack) {
   motors[0].displace(5020);
+  at(now);  // the axis learns of the input's edge at its next advance
   ASSERT_TRUE(has(status::kAtHome));
   home(command::kFindHomeUp, 1);
   walk();
@@ -234,6 +237,7 @@ TEST_F(AxisHoming, Stp100_5_3_2_SimpleMethodTrustsTheStopEvenWhenItOvershoots) {
     at(*next);
   }
   motors[0].displace(25);
+  at(now);
   walk();
   EXPECT_TRUE(has(status::kPositionValid));
   EXPECT_FALSE(has(status::kAtHome));

@@ -11,6 +11,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
@@ -28,7 +29,8 @@ class AxisIndexed : public ::testing::Test {
   }
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) {
     motors.assign(1, sim::AxisMachine(m));
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]}, &estop);
+    estop.wire({&motors[0]});
+    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
     now = 0;
     held = 0;
     axis->write_commands(command::kClearErrors, now);
@@ -86,7 +88,7 @@ class AxisIndexed : public ::testing::Test {
   }
 
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   Tick now = 0;
   uint16_t held = 0;

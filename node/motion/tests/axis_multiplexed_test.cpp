@@ -10,6 +10,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -30,7 +31,8 @@ class AxisMultiplexed : public ::testing::Test {
     motors.assign(3, sim::AxisMachine(m));
     std::vector<MotorPort*> ports;
     for (unsigned i = 0; i < count; ++i) ports.push_back(&motors[i]);
-    axis = std::make_unique<Axis>(c, ports, &estop);
+    estop.wire({&motors[0], &motors[1], &motors[2]});
+    axis = std::make_unique<Axis>(c, ports);
     now = 0;
     held = 0;
     axis->write_commands(command::kClearErrors, now);
@@ -70,7 +72,7 @@ class AxisMultiplexed : public ::testing::Test {
   uint16_t errors() const { return axis->status() & status::kErrors; }
 
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   Tick now = 0;
   uint16_t held = 0;

@@ -4,6 +4,7 @@
 
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
@@ -16,7 +17,8 @@ class AxisRules : public ::testing::Test {
     motors.assign(3, sim::AxisMachine(machine));
     std::vector<MotorPort*> ptrs{&motors[0]};
     if (config_multiplexed) ptrs = {&motors[0], &motors[1], &motors[2]};
-    axis = std::make_unique<Axis>(config, ptrs, &estop);
+    estop.wire({&motors[0], &motors[1], &motors[2]});
+    axis = std::make_unique<Axis>(config, ptrs);
     now = 0;
   }
   static sim::AxisMachineConfig default_machine() {
@@ -49,7 +51,7 @@ class AxisRules : public ::testing::Test {
 
   bool config_multiplexed = false;
   std::vector<sim::AxisMachine> motors;
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<Axis> axis;
   Tick now = 0;
   uint16_t held = 0;

@@ -9,8 +9,7 @@ namespace {
 
 TEST(AxisSmoke, ClearSetPositionMoveRelativeAndAbsolute) {
   sim::AxisMachine m;
-  bool estop = false;
-  Axis axis({}, {&m}, &estop);
+  Axis axis({}, {&m});
   EXPECT_EQ(axis.status() & status::kPowerUp, status::kPowerUp);  // SPM30 3.1
   axis.write_commands(command::kMoveRelative, 0);                 // refused: error latched
   EXPECT_FALSE(axis.status() & status::kMoving);
@@ -48,8 +47,7 @@ TEST(AxisSmoke, FindHomeNormalMethodStopsPreciselyAtHome) {
   sim::AxisMachineConfig cfg;
   cfg.home = sim::Cam{5000, 40};
   sim::AxisMachine m(cfg);
-  bool estop = false;
-  Axis axis({}, {&m}, &estop);
+  Axis axis({}, {&m});
   axis.write_commands(command::kClearErrors, 0);
   axis.words().destination = 123;
   axis.write_commands(0, 1);
@@ -67,8 +65,7 @@ TEST(AxisSmoke, FindHomeNormalMethodStopsPreciselyAtHome) {
 // steps, and the axis must still come to rest (a regression: it stayed "decelerating").
 TEST(AxisSmoke, JogReleaseEndsInStandstill) {
   sim::AxisMachine m;
-  bool estop = false;
-  Axis axis({}, {&m}, &estop);
+  Axis axis({}, {&m});
   axis.write_commands(command::kClearErrors, 0);
   axis.write_commands(0, 1);
   axis.write_commands(command::kJogDown, 10);

@@ -11,6 +11,7 @@
 #include "node/motion/axis.hpp"
 #include "node/motion/hp_channel.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::motion::hp {
 namespace {
@@ -30,8 +31,9 @@ class HpChannel : public ::testing::Test {
   void SetUp() override { build(); }
   void build(sim::AxisMachineConfig m = plain()) {
     motor = std::make_unique<sim::AxisMachine>(m);
-    axis = std::make_unique<Axis>(AxisConfig{}, std::vector<MotorPort*>{motor.get()}, &estop);
-    ch = std::make_unique<Channel>(axis->core(), *motor);
+    estop.wire({motor.get()});
+    axis = std::make_unique<Axis>(AxisConfig{}, std::vector<MotorPort*>{motor.get()});
+    ch = std::make_unique<Channel>(axis->core());
     ch->on_interrupt = [this](uint8_t e, Tick t) { interrupts.push_back({e, t}); };
     now = 0;
   }
@@ -54,7 +56,7 @@ class HpChannel : public ::testing::Test {
     uint8_t event;
     Tick at;
   };
-  bool estop = false;
+  sim::EStopSwitch estop;
   std::unique_ptr<sim::AxisMachine> motor;
   std::unique_ptr<Axis> axis;
   std::unique_ptr<Channel> ch;
@@ -419,8 +421,8 @@ TEST_F(HpChannel, TrigSysStartsOnSync) {
 
 TEST_F(HpChannel, TrigChan0StartsWithChannel0) {
   sim::AxisMachine motor1(plain());
-  Axis axis1(AxisConfig{}, {&motor1}, &estop);
-  Channel ch1(axis1.core(), motor1);
+  Axis axis1(AxisConfig{}, {&motor1});
+  Channel ch1(axis1.core());
   ch->on_triggered = [&](Tick t) { ch1.chan0_triggered(t); };
   ASSERT_EQ(ch1.trig(TrigMode::Chan0, now), Error::None);
   ASSERT_EQ(ch1.move(30, false, true, now), Error::None);
@@ -497,7 +499,8 @@ TEST_F(HpChannel, HaltSwitchStopsPulsesAndHaltOffIgnoresIt) {
   ASSERT_EQ(ch->sustain(200, true, now), Error::None);
   wait(500);
   ch->enable_intr();
-  ch->set_halt_input(false, now);  // switch pulls HALTn LO; HALT LO is the power-on mode
+  motor->set_halt_input(false);  // switch pulls HALTn LO; HALT LO is the power-on mode
+  axis->advance_to(now);         // the channel sees the input's edge
   EXPECT_EQ(done(), 1);
   ASSERT_EQ(interrupts.size(), 1u);
   EXPECT_EQ(interrupts[0].event, intr::kHaltSwitch);
@@ -509,7 +512,8 @@ TEST_F(HpChannel, HaltSwitchStopsPulsesAndHaltOffIgnoresIt) {
   wait(1000);
   EXPECT_EQ(done(), 0);
   // HALT HI: the (open, pulled-up) input now reads as active.
-  ch->set_halt_input(true, now);
+  motor->set_halt_input(true);
+  axis->advance_to(now);
   ch->halt_mode(HaltMode::Hi, now);
   ASSERT_EQ(ch->move(10, false, true, now), Error::None);
   EXPECT_EQ(done(), 1);
@@ -761,9 +765,8 @@ TEST(HpPulseOutputs, TheMotorGetsTheOutputsAndFollowsTheirDirectionInBothModes) 
       sim::AxisMachineConfig m;
       m.encoder = sim::EncoderKind::None;
       PulseRecorder motor(m);
-      bool estop = false;
-      Axis axis(AxisConfig{}, {&motor}, &estop);
-      Channel ch(axis.core(), motor);
+      Axis axis(AxisConfig{}, {&motor});
+      Channel ch(axis.core());
       ch.pulse(PulseSetup{mode, true, ndir_high});
       ASSERT_EQ(ch.move(7, false, true, 0), Error::None);
       ch.advance(kClockHz);

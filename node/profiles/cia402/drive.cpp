@@ -263,7 +263,7 @@ void Drive::velocity_to(int64_t target, Tick now) {
 void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
-  const bool limit = step.direction < 0 ? core_.motor().lower_limit() : core_.motor().upper_limit();
+  const bool limit = step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
   if (!limit) return;
   core_.halt(*this, step.time);
   active_.reset();
@@ -366,7 +366,7 @@ int32_t Drive::velocity_actual() const {
 }
 
 uint32_t Drive::digital_inputs() const {
-  const motion::MotorPort& m = core_.motor();
+  const motion::InputLevels& m = core_.inputs();
   return (m.lower_limit() ? 1u : 0u) | (m.upper_limit() ? 2u : 0u) | (m.home() ? 4u : 0u);
 }
 
@@ -425,13 +425,13 @@ uint16_t Drive::statusword() const {
 // ---- homing ---------------------------------------------------------------------------
 
 HomingInputs Drive::homing_inputs() const {
-  const motion::MotorPort& m = core_.motor();
+  const motion::InputLevels& m = core_.inputs();
   return HomingInputs{m.lower_limit(), m.upper_limit(), m.home(), m.marker()};
 }
 
 void Drive::start_homing(Tick now) {
   if (core_.busy()) return;  // another front end's job, or still stopping
-  auto plan = homing_plan(parameters_.homing_method, core_.motor().home());
+  auto plan = homing_plan(parameters_.homing_method, core_.inputs().home());
   if (!plan) {
     homing_ = Homing::Error;  // 6098h names no method this drive performs
     return;

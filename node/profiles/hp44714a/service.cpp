@@ -31,7 +31,7 @@ bool move_in_range(const hp::Channel& ch, double d, bool absolute) {
 HpService::HpService(od::Dictionary& dictionary, AxisBank& axes, EmcyProducer& emcy)
     : dictionary_(dictionary), axes_(axes), emcy_(emcy) {
   for (unsigned a = 0; a < axes_.count(); ++a) {
-    channels_.push_back(std::make_unique<hp::Channel>(axes_.core(a), axes_.machine().axes.at(a)));
+    channels_.push_back(std::make_unique<hp::Channel>(axes_.core(a)));
     hp::Channel& ch = *channels_.back();
     ch.on_interrupt = [this, a](uint8_t event, motion::Tick) {
       // Halts and limits also go out as EMCY (condition 3, 4, 5 -> 0xFF43..0xFF45).
@@ -197,8 +197,10 @@ void HpService::install_counter_hooks(unsigned a) {
     v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);
   };
   uint16_t sim = sim_index(a);
-  od::listen(od.at(sim, hp44714a::sim_sub::kHaltInputHigh), [this, a, sim, &ch] {
-    ch.set_halt_input(dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kHaltInputHigh) != 0, now());
+  od::listen(od.at(sim, hp44714a::sim_sub::kHaltInputHigh), [this, a, sim] {
+    // The simulated HALT switch is an input of the motor's port: the channel sees its edge.
+    axes_.machine().axes.at(a).set_halt_input(dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kHaltInputHigh) != 0);
+    axes_.advance(axes_.now_us());
     publish(a);
   });
   od::listen(od.at(sim, hp44714a::sim_sub::kTestJumper), [this, sim, &ch] {
@@ -236,7 +238,8 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   ch.hardlim(g8(lim, hp44714a::limits_sub::kPlimSense) != 0, g8(lim, hp44714a::limits_sub::kNlimSense) != 0);
   ch.halt_mode(static_cast<hp::HaltMode>(g8(lim, hp44714a::limits_sub::kHaltMode)), t);
   ch.qscale(dictionary_.get<double>(index(a, kQuadrature), hp44714a::quad_sub::kQscale));
-  ch.set_halt_input(g8(sim_index(a), hp44714a::sim_sub::kHaltInputHigh) != 0, t);
+  axes_.machine().axes.at(a).set_halt_input(g8(sim_index(a), hp44714a::sim_sub::kHaltInputHigh) != 0);
+  axes_.advance(axes_.now_us());
   ch.set_test_jumper(g8(sim_index(a), hp44714a::sim_sub::kTestJumper) != 0);
 }
 

@@ -62,7 +62,7 @@ void SimService::install_hooks() {
     });
   }
   od::listen(dictionary_.at(sim_obj::kEmergencyStop, 0), [this] {
-    machine().emergency_stop = dictionary_.get<uint8_t>(sim_obj::kEmergencyStop, 0) != 0;
+    machine().set_emergency_stop(dictionary_.get<uint8_t>(sim_obj::kEmergencyStop, 0) != 0);
     axes_.advance(axes_.now_us());
   });
 }

@@ -254,7 +254,7 @@ TEST(SimMachineModel, StepSinkRecordsPulsesTimesAndDirections) {
 
 TEST(SimMachineModel, MachineHoldsItsAxesAndTheSharedEmergencyStop) {
   Machine machine;
-  EXPECT_FALSE(machine.emergency_stop);
+  EXPECT_FALSE(machine.emergency_stop());
   machine.axes.resize(3);
   machine.axes[1].step(+1);
   machine.axes[2].displace(-5);

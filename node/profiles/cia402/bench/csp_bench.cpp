@@ -40,8 +40,7 @@ struct Figures {
 Figures run(int hz, int cycles, double amplitude, double period_s, double jitter_us) {
   using namespace stepnode;
   Recording motor;
-  bool estop = false;
-  motion::AxisCore core({&motor}, &estop);
+  motion::AxisCore core({&motor});
   cia402::Drive drive(core);
   const Tick cycle = kClockHz / hz;
   drive.parameters().max_velocity = 10'000'000;

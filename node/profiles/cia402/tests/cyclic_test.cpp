@@ -12,6 +12,7 @@
 
 #include "node/profiles/cia402/drive.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::cia402 {
 namespace {
@@ -30,8 +31,8 @@ struct Recording : sim::AxisMachine {
 class Cyclic : public ::testing::Test {
  protected:
   Recording motor;
-  bool estop = false;
-  motion::AxisCore core{{&motor}, &estop};
+  sim::EStopSwitch estop{{&motor}};
+  motion::AxisCore core{{&motor}};
   Drive drive{core};
   Tick now = 0;
 

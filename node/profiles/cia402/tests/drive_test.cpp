@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::cia402 {
 namespace {
@@ -37,8 +38,8 @@ struct Recording : sim::AxisMachine {
 class DriveTest : public ::testing::Test {
  protected:
   Recording motor;
-  bool estop = false;
-  motion::AxisCore core{{&motor}, &estop};
+  sim::EStopSwitch estop{{&motor}};
+  motion::AxisCore core{{&motor}};
   Drive drive{core};
   Tick now = 0;
 

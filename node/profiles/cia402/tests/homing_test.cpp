@@ -11,6 +11,7 @@
 
 #include "node/profiles/cia402/drive.hpp"
 #include "node/sim/machine.hpp"
+#include "node/sim/tests/estop_switch.hpp"
 
 namespace stepnode::cia402 {
 namespace {
@@ -25,8 +26,8 @@ constexpr uint16_t kError = 1u << 13;
 class Homing : public ::testing::Test {
  protected:
   sim::AxisMachine motor;
-  bool estop = false;
-  motion::AxisCore core{{&motor}, &estop};
+  sim::EStopSwitch estop{{&motor}};
+  motion::AxisCore core{{&motor}};
   Drive drive{core};
   Tick now = 0;
 
@@ -57,8 +58,12 @@ class Homing : public ::testing::Test {
   void limits(std::optional<int64_t> low, std::optional<int64_t> high) {
     motor.config().lower_limit = low;
     motor.config().upper_limit = high;
+    core.advance_to(now);  // the core learns of the inputs' edges at its next advance
   }
-  void home_switch(int64_t from, int64_t to) { motor.config().home = sim::Cam{from, to - from}; }
+  void home_switch(int64_t from, int64_t to) {
+    motor.config().home = sim::Cam{from, to - from};
+    core.advance_to(now);
+  }
   // A fresh machine at mechanical position `at`, the drive powered up.
   void reset(int64_t at = 0) {
     motor = sim::AxisMachine{};
