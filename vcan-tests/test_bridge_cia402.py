@@ -215,6 +215,9 @@ def test_a_fault_brings_its_error_code_and_the_reset_clears_it(master, start_nod
         # 1016h: consume the master's heartbeat (200 ms); 6007h = 1: a lost master is a fault.
         master.write_u32(NODE, 0x1016, 1, (MASTER_ID << 16) | 200)
         master.write_u8(NODE, 0x1029, 1, 1)
+        # CiA 301: a heartbeat consumer starts watching at the first heartbeat it receives
+        # after it was configured; stopped before one arrived, nothing is lost. Let beats in.
+        time.sleep(0.3)
         drive.enable(MODE_PP)
         mark, bus_mark = watch.mark(), drive.mark()
         hb.stop()
