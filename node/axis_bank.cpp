@@ -4,6 +4,9 @@ namespace stepnode::node {
 
 AxisBank::AxisBank(const DeviceLayout& layout) {
   machine_.axes.resize(layout.motors());
+  // The step port's horizon, in ticks (4.9152 per microsecond, exact).
+  const motion::Tick horizon = static_cast<motion::Tick>(uint64_t{layout.step_horizon_us} * 3072 / 625);
+  for (sim::AxisMachine& m : machine_.axes) m.set_horizon(horizon);
   for (unsigned a = 0; a < layout.axes; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
     if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};

@@ -61,6 +61,11 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given
     if (!us || *us < 100 || *us > 100000) bad("tick_us", "must be an integer 100..100000");
     cfg.tick_us = static_cast<uint64_t>(*us);
   }
+  if (auto v = t["step_horizon_us"]) {
+    auto us = v.value<int64_t>();
+    if (!us || *us < 0 || *us > 1'000'000) bad("step_horizon_us", "must be an integer 0..1000000");
+    cfg.options.layout.step_horizon_us = static_cast<uint32_t>(*us);
+  }
   if (auto v = t["axes"]) {
     auto n = v.value<int64_t>();
     if (!n || *n < 1 || *n > static_cast<int64_t>(kMaxAxes)) bad("axes", "must be an integer 1..8");

@@ -24,6 +24,10 @@ struct DeviceLayout {
   bool hp = true;      // the HP 44714A channels (0x2n10-0x2n1E)
   bool user = true;    // the user objects (0x2F00, 0x2F01)
   bool cia402 = false;  // the CiA 402 drive (0x6000 + 0x800 per axis)
+  // How far ahead of its time a step is given to the back end's step port (0: as it falls
+  // due). The simulated machine reproduces every step train at any horizon; a hardware
+  // back end needs one longer than its worst scheduling delay.
+  uint32_t step_horizon_us = 0;
   // Simulated motors (0x5000 blocks): one per axis, or 3 behind a multiplexed axis.
   unsigned motors() const { return spm30_multiplexed ? 3 : axes; }
   // RPDOs (and as many TPDOs). The register block: four per axis (Horner RPDO/TPDO

@@ -72,11 +72,16 @@ Train read_train(const std::string& name, std::string& error) {
   return train;
 }
 
-class GoldenTrains : public NodeHarness {
+// Each scenario runs with the step port's horizon (microseconds) of the parameter: the
+// steps are given to the simulated machine that far ahead of their time, and a change of
+// course (a stop, the home switch, a new velocity) takes the queued ones back. The trains
+// must be the same at every horizon.
+class GoldenTrains : public NodeHarness, public ::testing::WithParamInterface<uint32_t> {
  protected:
   void SetUp() override { build(DeviceLayout{.axes = 1}); }
   // A device with the profiles of `layout` (all of them by default), operational.
-  void build(const DeviceLayout& layout) {
+  void build(DeviceLayout layout) {
+    layout.step_horizon_us = GetParam();
     make(layout);
     nmt(0x01);
     train.clear();
@@ -87,6 +92,7 @@ class GoldenTrains : public NodeHarness {
   void check(const std::string& name) {
     ASSERT_GT(train.size(), 10u) << "the scenario moved nothing";
     if (std::getenv("STEPNODE_GOLDEN_RECORD")) {
+      if (GetParam() != 0) GTEST_SKIP() << "recorded at horizon 0 only";
       write_train(name, train);
       GTEST_SKIP() << "recorded " << golden_path(name);
     }
@@ -152,9 +158,9 @@ class GoldenTrains : public NodeHarness {
   Train train;
 };
 
-TEST_F(GoldenTrains, HornerTrapezoid) { horner_trapezoid(); }
+TEST_P(GoldenTrains, HornerTrapezoid) { horner_trapezoid(); }
 
-TEST_F(GoldenTrains, HornerTriangle) {
+TEST_P(GoldenTrains, HornerTriangle) {
   command(cmd::kClearErrors);
   profile_word(horner::profile_sub::kAcceleration, 800);
   destination(250);
@@ -163,10 +169,13 @@ TEST_F(GoldenTrains, HornerTriangle) {
   check("horner_triangle");
 }
 
-TEST_F(GoldenTrains, HornerJog) {
+TEST_P(GoldenTrains, HornerJog) {
   command(cmd::kClearErrors);
   ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kCommandBits), 0, cmd::kJogUp, 2), 0u);
   advance_ms(1500);
+  // Jogging: the steps of the horizon wait in the port (none without one).
+  if (GetParam() == 0) EXPECT_EQ(device->machine().axes[0].queued(), 0u);
+  else EXPECT_GT(device->machine().axes[0].queued(), 0u);
   ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kCommandBits), 0, 0, 2), 0u);
   advance_ms(1500);
   ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kCommandBits), 0, cmd::kJogDown, 2), 0u);
@@ -176,7 +185,7 @@ TEST_F(GoldenTrains, HornerJog) {
   check("horner_jog");
 }
 
-TEST_F(GoldenTrains, HornerIndexedMove) {
+TEST_P(GoldenTrains, HornerIndexedMove) {
   uint16_t sw = sim::obj::index(0, sim::obj::kSwitches);
   ASSERT_EQ(sdo_write(sw, sim::switches_sub::kIndexPosition, 1800), 0u);
   ASSERT_EQ(sdo_write(sw, sim::switches_sub::kIndexWidth, 10), 0u);
@@ -192,7 +201,7 @@ TEST_F(GoldenTrains, HornerIndexedMove) {
   check("horner_indexed");
 }
 
-TEST_F(GoldenTrains, HornerHoming) {
+TEST_P(GoldenTrains, HornerHoming) {
   // The home switch of the simulated machine is at 1000..1049 (its default).
   command(cmd::kClearErrors);
   command(cmd::kFindHomeUp);
@@ -205,22 +214,22 @@ TEST_F(GoldenTrains, HornerHoming) {
   check("horner_homing");
 }
 
-TEST_F(GoldenTrains, HpFrequencyRampMoves) { hp_freq_move(); }
+TEST_P(GoldenTrains, HpFrequencyRampMoves) { hp_freq_move(); }
 
 // A device with one profile runs the same engine: the same trains, tick for tick.
-TEST_F(GoldenTrains, HornerTrapezoidOnAHornerOnlyDevice) {
+TEST_P(GoldenTrains, HornerTrapezoidOnAHornerOnlyDevice) {
   build(DeviceLayout{.axes = 1, .hp = false, .user = false});
   ASSERT_EQ(od().object(hp_obj::index(0, hp_obj::kProfile)), nullptr);
   horner_trapezoid();
 }
 
-TEST_F(GoldenTrains, HpFrequencyRampMovesOnAnHpOnlyDevice) {
+TEST_P(GoldenTrains, HpFrequencyRampMovesOnAnHpOnlyDevice) {
   build(DeviceLayout{.axes = 1, .horner = false, .user = false});
   ASSERT_EQ(od().object(axis_obj::index(0, axis_obj::kCommandBits)), nullptr);
   hp_freq_move();
 }
 
-TEST_F(GoldenTrains, HpSustainChanges) {
+TEST_P(GoldenTrains, HpSustainChanges) {
   hp_profile(0, 100, 2000, 1000, 25e-6);
   ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kNowait, 1), 0u);
   hp_sustain(1500);
@@ -236,7 +245,7 @@ TEST_F(GoldenTrains, HpSustainChanges) {
   check("hp_sustain");
 }
 
-TEST_F(GoldenTrains, HpWidthMode) {
+TEST_P(GoldenTrains, HpWidthMode) {
   // HP manual 3-28: PROFILE WIDTH 1E-3 10E-3 5E-3 20E-3, SUSTAIN 2E-3, then SUSTAIN 0.
   hp_profile(1, 1e-3, 10e-3, 5e-3, 20e-3);
   ASSERT_EQ(put_int<uint8_t>(hp_obj::index(0, hp_obj::kMove), hp44714a::move_sub::kNowait, 1), 0u);
@@ -246,6 +255,13 @@ TEST_F(GoldenTrains, HpWidthMode) {
   advance_ms(1000);
   check("hp_width");
 }
+
+// 0: each step given as it falls due; 1 ms: about one tick of the node ahead; 100 ms: far
+// ahead (hundreds of steps queued at the top rates).
+INSTANTIATE_TEST_SUITE_P(Horizon, GoldenTrains, ::testing::Values(0u, 1000u, 100000u),
+                         [](const ::testing::TestParamInfo<uint32_t>& p) {
+                           return std::to_string(p.param) + "us";
+                         });
 
 }  // namespace
 }  // namespace stepnode::node::test
