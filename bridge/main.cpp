@@ -14,12 +14,14 @@
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "bridge/config.hpp"
 #include "bridge/dds/publisher.hpp"
 #include "bridge/observer/bus_observer.hpp"
 #include "canio/event_loop.hpp"
+#include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
 
 using namespace stepnode;
@@ -83,10 +85,19 @@ int run(const bridge::BridgeConfig& cfg) {
     can.flush();
   });
 
+  // The service manager (README "Running as a service"): the participant and the CAN
+  // socket exist by now, so the bridge serves; the watchdog is a timer of this loop, so a
+  // hung loop stops petting.
+  canio::ServiceNotifier notifier;
+  if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
+
   spdlog::info("stepbridge on {}, DDS domain {}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "");
+  notifier.status("bridging " + cfg.iface + " to DDS domain " + std::to_string(cfg.domain));
+  notifier.ready();
   loop.run();
 
   spdlog::info("stopping: disposing axis instances");
+  notifier.stopping();
   observer.dispose_all();
   publisher.wait_acknowledged(500);
   spdlog::info("{} samples written, {} write failures", publisher.written(), publisher.write_failures());

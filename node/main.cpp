@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <ctime>
 #include <iostream>
+#include <string>
 
 #include "node/config.hpp"
 #include "node/device.hpp"
 #include "canio/event_loop.hpp"
+#include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
 #include "od/eds.hpp"
 
@@ -51,6 +53,22 @@ int run(const node::NodeConfig& cfg) {
 
   canio::EventLoop loop;
   loop.stop_on_signals();
+  // The service manager (README "Running as a service"): READY once the node serves, the
+  // watchdog petted by a timer of this loop, so a loop that hangs stops petting and the
+  // manager restarts the node.
+  canio::ServiceNotifier notifier;
+  bool ready_sent = false;
+  auto tell_ready_once_sent = [&] {
+    // The boot-up frame must be on the bus first: a master that waits for READY and then
+    // for the boot-up would miss it otherwise. A full controller queue delays it to a tick.
+    if (ready_sent || can.has_pending()) return;
+    ready_sent = true;
+    notifier.status(device.canopen().configured()
+                        ? "node " + std::to_string(device.canopen().node_id()) + " on " + cfg.iface
+                        : "waiting for an LSS master on " + cfg.iface);
+    notifier.ready();
+  };
+  if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
   loop.watch(can.fd(), [&] {
     while (auto r = can.receive()) {
       uint64_t now = canio::EventLoop::now_us();
@@ -67,6 +85,7 @@ int run(const node::NodeConfig& cfg) {
   loop.every(cfg.tick_us, [&] {
     device.on_tick(canio::EventLoop::now_us());
     can.flush();
+    tell_ready_once_sent();
   });
   if (device.canopen().configured())
     spdlog::info("node {} on {}, {} axes, parameters in {}", device.canopen().node_id(), cfg.iface,
@@ -75,8 +94,11 @@ int run(const node::NodeConfig& cfg) {
     spdlog::info("node without a node-ID on {} (LSS-unconfigured), {} axes, LSS configuration in {}", cfg.iface,
                  cfg.options.layout.axes, device.canopen().lss_file().string());
   device.start(canio::EventLoop::now_us());
+  can.flush();
+  tell_ready_once_sent();
   loop.run();
   spdlog::info("stopping");
+  notifier.stopping();
   can.flush();
   return 0;
 }
