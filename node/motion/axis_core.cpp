@@ -127,7 +127,9 @@ void AxisCore::take(const Step& step) {
   else out.step(step.time, step.direction);  // the step sink
   if (hooks_.pulse) owner_->pulse_sent(step);
   position_ += step.direction;
-  read_inputs();  // the edges the step made (a switch reached) come before any rule
+  // The edges the step made (a switch reached) come before any rule. Only the motor that
+  // stepped can have one; the flag is looked at inline (most steps make none).
+  if (motors_[selected_].port->edges_waiting()) read_inputs();
   if (step_watchers_ == 0) return;
   for (const Listener& l : listeners_)
     if (l.steps && (!owner_ || l.self != owner_)) l.listener->step_taken(step);
@@ -136,7 +138,7 @@ void AxisCore::take(const Step& step) {
 void AxisCore::read_inputs() {
   InputEdge edge;
   for (unsigned m = 0; m < motors_.size(); ++m)
-    while (motors_[m].port->next_edge(edge)) {
+    while (motors_[m].port->edges_waiting() && motors_[m].port->next_edge(edge)) {
       motors_[m].levels.set(edge.input, edge.active);
       if (input_watchers_ == 0) continue;
       for (const Listener& l : listeners_)

@@ -55,9 +55,15 @@ class InputPort {
   virtual InputLevels levels() = 0;
   // The oldest edge not read yet; false when there is none. Edges come in time order.
   virtual bool next_edge(InputEdge& edge) = 0;
+  // Whether next_edge may have one: a flag, not a call, because the core asks after every
+  // step and almost always the answer is no.
+  bool edges_waiting() const { return edges_waiting_; }
   // Encoder counts (0 without an encoder): for a quadrature encoder every edge of A and B,
   // 4 per line, as a quadrature decoder counts them at its finest.
   virtual int64_t encoder_count() const = 0;
+
+ protected:
+  bool edges_waiting_ = true;  // the back end sets it when it has an edge or a change to look at
 };
 
 }  // namespace stepnode::motion

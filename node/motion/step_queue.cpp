@@ -19,11 +19,9 @@ std::optional<int64_t> StepQueue::position_at(Tick time) const {
     at += e.direction;
   }
   // Back: undo the steps that went out after `time`, newest first.
-  const std::size_t kept = sent_ < history_.size() ? static_cast<std::size_t>(sent_) : history_.size();
-  std::size_t slot = next_;
-  for (std::size_t i = 0; i < kept; ++i) {
-    slot = slot == 0 ? history_.size() - 1 : slot - 1;
-    const Entry& e = history_[slot];
+  const uint64_t kept = sent_ < history_.size() ? sent_ : history_.size();
+  for (uint64_t i = 1; i <= kept; ++i) {
+    const Entry& e = history_[(sent_ - i) & mask_];
     if (e.time <= time) return at;
     at -= e.direction;
   }

@@ -3,6 +3,7 @@
 // time. The simulated machine keeps its steps here; a hardware back end would keep the
 // steps it has sent here too, to answer position_at.
 #pragma once
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -20,8 +21,9 @@ class StepQueue {
     int direction;  // +1 / -1
   };
 
-  // `history`: how many of the steps that went out are kept for position_at.
-  explicit StepQueue(std::size_t history = 4096) : history_(history) {}
+  // `history`: how many of the steps that went out are kept for position_at (rounded up
+  // to a power of two: a step costs a store and an increment).
+  explicit StepQueue(std::size_t history = 4096) : history_(std::bit_ceil(history)), mask_(history_.size() - 1) {}
 
   void push(Tick time, int direction) { queued_.push_back({time, direction >= 0 ? +1 : -1}); }
   bool due(Tick until) const { return !queued_.empty() && queued_.front().time <= until; }
@@ -32,12 +34,10 @@ class StepQueue {
     went_out(e.time, e.direction);
     return e;
   }
-  // A step that went out without being queued (a step given at its time).
+  // A step that went out without being queued (a step given at its time); direction +1/-1.
   void went_out(Tick time, int direction) {
-    count_ += direction >= 0 ? 1 : -1;
-    if (history_.empty()) return;
-    history_[next_] = {time, direction >= 0 ? +1 : -1};
-    next_ = next_ + 1 == history_.size() ? 0 : next_ + 1;
+    count_ += direction;
+    history_[sent_ & mask_] = {time, direction};
     ++sent_;
   }
   // Drops the queued steps after `after`; returns how many.
@@ -50,8 +50,8 @@ class StepQueue {
 
  private:
   std::deque<Entry> queued_;
-  std::vector<Entry> history_;  // a ring: next_ is the slot the next step goes to
-  std::size_t next_ = 0;
+  std::vector<Entry> history_;  // a ring: step n that went out is in slot n & mask_
+  uint64_t mask_;
   uint64_t sent_ = 0;  // steps that went out (history_ holds the last of them)
   int64_t count_ = 0;
 };

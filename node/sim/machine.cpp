@@ -22,8 +22,9 @@ AxisMachine::AxisMachine(AxisMachineConfig config) : config_(config) {
 }
 
 void AxisMachine::step(motion::Tick time, int direction) {
-  steps_.went_out(time, direction);
-  move(time, direction);
+  const int d = direction >= 0 ? +1 : -1;
+  steps_.went_out(time, d);
+  move(time, d);
 }
 
 void AxisMachine::flush(motion::Tick until) {
@@ -34,15 +35,14 @@ void AxisMachine::flush(motion::Tick until) {
   clock_ = std::max(clock_, until);
 }
 
-void AxisMachine::move(motion::Tick time, int direction) {
+void AxisMachine::move(motion::Tick time, int direction) {  // direction: +1 / -1
   ++pulses_;
-  last_step_time_ = time;
-  clock_ = std::max(clock_, time);
+  last_step_time_ = clock_ = time;  // steps come in time order, each after the last flush
   if (trace_) [[unlikely]] record(time, direction);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping
-  int64_t next = position_ + (direction >= 0 ? 1 : -1);
+  int64_t next = position_ + direction;
   if (config_.stall_above && next > *config_.stall_above) return;  // jammed
   if (config_.stall_below && next < *config_.stall_below) return;
   position_ = next;
@@ -74,6 +74,7 @@ void AxisMachine::sense(motion::Tick time) {
     if (changed & bit) {
       const auto input = static_cast<motion::Input>(bit);
       edges_.push_back({time, input, now.is(input)});
+      edges_waiting_ = true;
     }
   reported_ = now;
   find_steady_range();
@@ -126,7 +127,10 @@ bool AxisMachine::next_edge(motion::InputEdge& edge) {
     changed_ = false;
     sense(clock_);
   }
-  if (edges_.empty()) return false;
+  if (edges_.empty()) {
+    edges_waiting_ = false;
+    return false;
+  }
   edge = edges_.front();
   edges_.pop_front();
   return true;

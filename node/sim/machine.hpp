@@ -68,7 +68,7 @@ class AxisMachine : public motion::MotorPort {
   // External force: the load moved without steps.
   void displace(int64_t steps) {
     position_ += steps;
-    changed_ = true;
+    changed_ = edges_waiting_ = true;
   }
   // Motor power (the drive's standby input): an unpowered motor holds no torque, so a
   // pulse it receives moves nothing (HP 44714A STANDBY ON, 3-13).
@@ -91,12 +91,12 @@ class AxisMachine : public motion::MotorPort {
   // the HALT switch input's level (HIGH: open, pulled up).
   void set_emergency_stop(bool active) {
     estop_ = active;
-    changed_ = true;
+    changed_ = edges_waiting_ = true;
   }
   bool emergency_stop() const { return estop_; }
   void set_halt_input(bool high) {
     halt_high_ = high;
-    changed_ = true;
+    changed_ = edges_waiting_ = true;
   }
   bool halt_input_high() const { return halt_high_; }
   // Encoder counts as the input hardware sees them: every edge of A and B for quadrature
@@ -111,7 +111,7 @@ class AxisMachine : public motion::MotorPort {
 
   // The configuration; changing it through here is a change of the inputs from outside.
   AxisMachineConfig& config() {
-    changed_ = true;
+    changed_ = edges_waiting_ = true;
     return config_;
   }
   const AxisMachineConfig& config() const { return config_; }
