@@ -1,13 +1,12 @@
 #include "bridge/config.hpp"
 
 #include <CLI/CLI.hpp>
-#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <sstream>
 
+#include "config/toml_file.hpp"
 #include "od/cob_id.hpp"
 
 namespace stepnode::bridge {
@@ -39,11 +38,11 @@ void add_sdo_channel(BridgeConfig& cfg, const NodeSdoChannel& ch, const std::str
 }
 
 // [sdo_channels] 5 = [0x685, 0x6C5]: node = [client->server, server->client].
-void load_sdo_channels(const toml::table& t, BridgeConfig& cfg, const std::string& path) {
-  const toml::table* channels = t["sdo_channels"].as_table();
-  if (!channels) throw UsageError("config " + path + ": sdo_channels: must be a table (node = [rx, tx])");
+void load_sdo_channels(const config::TomlFile& file, BridgeConfig& cfg) {
+  const toml::table* channels = file.table().get_as<toml::table>("sdo_channels");
+  if (!channels) file.refuse("sdo_channels", "must be a table (node = [rx, tx])");
   for (const auto& [key, value] : *channels) {
-    const std::string what = "config " + path + ": sdo_channels." + std::string(key.str());
+    const std::string what = "config " + file.path() + ": sdo_channels." + std::string(key.str());
     const toml::array* ids = value.as_array();
     if (!ids || ids->size() != 2 || !ids->at(0).is_integer() || !ids->at(1).is_integer())
       throw UsageError(what + ": must be [CLIENT_TO_SERVER, SERVER_TO_CLIENT]");
@@ -62,39 +61,17 @@ void load_sdo_channels(const toml::table& t, BridgeConfig& cfg, const std::strin
 
 // Applies the file's keys that the command line did not set.
 void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App& app) {
-  toml::table t;
-  try {
-    t = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream msg;
-    msg << "config " << path << ": " << e.description();
-    if (e.source().begin) msg << " (line " << e.source().begin.line << ")";
-    throw UsageError(msg.str());
-  }
-  auto bad = [&](const std::string& key, const std::string& rule) {
-    throw UsageError("config " + path + ": " + key + ": " + rule);
-  };
-  auto given = [&](const char* option) { return app.count(option) > 0; };
+  const config::TomlFile file(path);
+  auto given = [&](const char* option) { return option && app.count(option) > 0; };
   auto string_key = [&](const char* key, const char* option, std::string& into) {
-    if (auto v = t[key]) {
-      if (!v.is_string()) bad(key, "must be a string");
-      if (!given(option)) into = *v.value<std::string>();
-    }
+    if (auto v = file.string(key); v && !given(option)) into = *v;
   };
   auto uint_key = [&](const char* key, const char* option, int64_t min, int64_t max, uint32_t& into) {
-    if (auto v = t[key]) {
-      auto n = v.value<int64_t>();
-      if (!v.is_integer() || !n || *n < min || *n > max)
-        bad(key, "must be an integer " + std::to_string(min) + ".." + std::to_string(max));
-      if (!option || !given(option)) into = static_cast<uint32_t>(*n);
-    }
+    if (auto v = file.integer(key, min, max); v && !given(option)) into = static_cast<uint32_t>(*v);
   };
   string_key("iface", "--iface", cfg.iface);
   uint_key("domain", "--domain", 0, kMaxDomain, cfg.domain);
-  if (auto v = t["ros2"]) {
-    if (!v.is_boolean()) bad("ros2", "must be true or false");
-    if (!given("--ros2")) cfg.ros2 = *v.value<bool>();
-  }
+  if (auto v = file.boolean("ros2"); v && !given("--ros2")) cfg.ros2 = *v;
   string_key("ros2_prefix", "--ros2-prefix", cfg.ros2_prefix);
   string_key("profiles", "--profiles", cfg.profiles);
   string_key("log_level", "--log-level", cfg.log_level);
@@ -102,14 +79,9 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000, cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
   // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
   uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
-  if (t.contains("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(t, cfg, path);
-  for (const auto& [key, value] : t) {
-    static const char* known[] = {"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level",
-                                  "tick_ms", "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels"};
-    bool ok = false;
-    for (const char* k : known) ok |= key.str() == k;
-    if (!ok) bad(std::string(key.str()), "unknown key");
-  }
+  if (file.has("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(file, cfg);
+  file.refuse_unknown_keys({"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level", "tick_ms",
+                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels"});
 }
 
 }  // namespace
@@ -157,10 +129,7 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
     throw UsageError(e.what());
   }
   for (const std::string& text : sdo_channels) add_sdo_channel(cfg, parse_sdo_channel(text), "--sdo-channel " + text);
-  if (!config_file.empty()) {
-    if (!std::filesystem::is_regular_file(config_file)) throw UsageError("config " + config_file + ": cannot read file");
-    load_config_file(config_file, cfg, app);
-  }
+  if (!config_file.empty()) load_config_file(config_file, cfg, app);
   if (app.count("--ros2-prefix") && !cfg.ros2) throw UsageError("--ros2-prefix needs --ros2");
   if (!cfg.profiles.empty() && !std::filesystem::is_regular_file(cfg.profiles))
     throw UsageError("profiles " + cfg.profiles + ": cannot read file");

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bridge/observer/bus_observer.hpp"
+#include "config/toml_file.hpp"
 
 namespace stepnode::bridge {
 
@@ -29,9 +30,7 @@ struct BridgeConfig {
 NodeSdoChannel parse_sdo_channel(const std::string& text);
 
 // Bad input: the message is the one line printed before exiting with status 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using config::UsageError;
 
 // Parses the command line and the --config file (the command line wins). `exit_now` is set
 // for --help (exit_code 0). Throws UsageError.

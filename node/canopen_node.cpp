@@ -149,8 +149,7 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
   // Stored mappings skip the mapping procedure: one naming an object this device does not
   // have (saved with two axes, started with one) is put back to its default record.
   for (unsigned n = 0; n < options_.layout.pdos(); ++n)
-    for (unsigned base : {0x1600u, 0x1A00u}) {
-      const auto index = static_cast<uint16_t>(base + n);
+    for (const uint16_t index : {od::rpdo_mapping(n), od::tpdo_mapping(n)}) {
       od::SdoAbort a = od::check_mapping_record(dictionary_, index);
       if (a == od::SdoAbort::None) continue;
       spdlog::warn("stored PDO mapping {:04X} is not valid ({}); default mapping kept", index, od::abort_text(a));

@@ -1,13 +1,13 @@
 #include "node/config.hpp"
 
 #include <CLI/CLI.hpp>
-#include <toml++/toml.h>
 
 #include <charconv>
 #include <cstdlib>
 #include <map>
-#include <sstream>
+#include <optional>
 
+#include "config/toml_file.hpp"
 #include "od/pdo_mapping.hpp"
 
 namespace stepnode::node {
@@ -20,119 +20,83 @@ std::filesystem::path default_state_dir() {
   return "/var/lib/stepnode";
 }
 
+// What the command line gave, which the file's keys do not override.
+struct GivenOnCommandLine {
+  bool iface = false;
+  bool node_id = false;
+  bool state_dir = false;
+};
+
+// node_id: 1..127, or "none" (255, CiA 305's invalid node-ID): the node waits for an LSS
+// master. Returns true when the file has the key.
+bool load_node_id(const config::TomlFile& file, NodeConfig& cfg, bool id_given) {
+  const toml::node* v = file.table().get("node_id");
+  if (!v) return false;
+  const int64_t id = v->value_exact<int64_t>().value_or(-1);  // -1: not an integer
+  const bool none = v->value_exact<std::string>() == "none" || id == lss::kUnconfigured;
+  if (!none && (id < 1 || id > 127)) file.refuse("node_id", "must be an integer 1..127, or \"none\" (255)");
+  if (!id_given) {
+    cfg.options.device.node_id = none ? lss::kUnconfigured : static_cast<uint8_t>(id);
+    cfg.options.node_id_origin = none ? NodeIdOrigin::None : NodeIdOrigin::ConfigFile;
+  }
+  return true;
+}
+
+// profiles: the profiles the device has, any of "horner", "hp", "user", "cia402" (default:
+// the first three).
+void load_profiles(const config::TomlFile& file, DeviceLayout& layout) {
+  if (!file.has("profiles")) return;
+  const char* rule = "must be a list of \"horner\", \"hp\", \"user\", \"cia402\"";
+  const toml::array* list = file.table().get_as<toml::array>("profiles");
+  if (!list) file.refuse("profiles", rule);
+  layout.horner = layout.hp = layout.user = layout.cia402 = false;
+  for (const auto& item : *list) {
+    auto name = item.value_exact<std::string>();
+    if (name && *name == "horner") layout.horner = true;
+    else if (name && *name == "hp") layout.hp = true;
+    else if (name && *name == "user") layout.user = true;
+    else if (name && *name == "cia402") layout.cia402 = true;
+    else file.refuse("profiles", rule);
+  }
+}
+
+// [defaults]: "1017" = 500 or "1016:1" = 0x000101F4, kept as text for the object's type.
+void load_object_defaults(const config::TomlFile& file, NodeConfig& cfg) {
+  const toml::table* defaults = file.table().get_as<toml::table>("defaults");
+  if (!defaults) return;
+  for (const auto& [key, value] : *defaults) {
+    std::string text;
+    if (auto i = value.value<int64_t>()) text = std::to_string(*i);
+    else if (auto s = value.value<std::string>()) text = *s;
+    else if (auto d = value.value<double>()) text = std::to_string(*d);
+    else file.refuse("defaults." + std::string(key.str()), "must be an integer, number or string");
+    cfg.object_defaults.emplace_back(std::string(key.str()), text);
+  }
+}
+
 // Returns true when the file set the node id.
-bool load_config_file(const std::string& path, NodeConfig& cfg, bool iface_given, bool id_given,
-                      bool state_given) {
-  bool id_set = false;
-  toml::table t;
-  try {
-    t = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream msg;
-    msg << "config " << path << ": " << one_line(e.description());
-    if (e.source().begin) msg << " (line " << e.source().begin.line << ")";
-    throw UsageError(msg.str());
-  }
-  auto bad = [&](const std::string& key, const std::string& rule) {
-    throw UsageError("config " + path + ": " + key + ": " + rule);
-  };
-  if (auto v = t["iface"]) {
-    if (!v.is_string()) bad("iface", "must be a string");
-    if (!iface_given) cfg.iface = *v.value<std::string>();
-  }
-  if (auto v = t["node_id"]) {
-    // "none" (or 255, CiA 305's invalid node-ID): the node waits for an LSS master.
-    auto id = v.value<int64_t>();
-    auto text = v.value<std::string>();
-    const bool none = (text && *text == "none") || (id && *id == lss::kUnconfigured);
-    if (!none && (!id || *id < 1 || *id > 127)) bad("node_id", "must be an integer 1..127, or \"none\" (255)");
-    if (!id_given) {
-      cfg.options.device.node_id = none ? lss::kUnconfigured : static_cast<uint8_t>(*id);
-      cfg.options.node_id_origin = none ? NodeIdOrigin::None : NodeIdOrigin::ConfigFile;
-    }
-    id_set = true;
-  }
-  if (auto v = t["state_dir"]) {
-    if (!v.is_string()) bad("state_dir", "must be a string");
-    if (!state_given) cfg.options.state_dir = *v.value<std::string>();
-  }
-  if (auto v = t["tick_us"]) {
-    auto us = v.value<int64_t>();
-    if (!us || *us < 100 || *us > 100000) bad("tick_us", "must be an integer 100..100000");
-    cfg.tick_us = static_cast<uint64_t>(*us);
-  }
-  if (auto v = t["step_horizon_us"]) {
-    auto us = v.value<int64_t>();
-    if (!us || *us < 0 || *us > 1'000'000) bad("step_horizon_us", "must be an integer 0..1000000");
+bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLine given) {
+  const config::TomlFile file(path);
+  if (auto iface = file.string("iface"); iface && !given.iface) cfg.iface = *iface;
+  const bool id_set = load_node_id(file, cfg, given.node_id);
+  if (auto dir = file.string("state_dir"); dir && !given.state_dir) cfg.options.state_dir = *dir;
+  if (auto us = file.integer("tick_us", 100, 100000)) cfg.tick_us = static_cast<uint64_t>(*us);
+  if (auto us = file.integer("step_horizon_us", 0, 1'000'000))
     cfg.options.layout.step_horizon_us = static_cast<uint32_t>(*us);
-  }
-  if (auto v = t["axes"]) {
-    auto n = v.value<int64_t>();
-    if (!n || *n < 1 || *n > static_cast<int64_t>(kMaxAxes)) bad("axes", "must be an integer 1..8");
-    cfg.options.layout.axes = static_cast<unsigned>(*n);
-  }
-  if (auto v = t["spm30_multiplexed"]) {
-    auto on = v.value<bool>();
-    if (!on) bad("spm30_multiplexed", "must be true or false");
+  if (auto n = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes))) cfg.options.layout.axes = static_cast<unsigned>(*n);
+  if (auto on = file.boolean("spm30_multiplexed")) {
     // SPM30 3-axis models: one register set and %Q1..%Q3 select one of three motors.
     cfg.options.layout.spm30_multiplexed = *on;
     if (*on) cfg.options.layout.axes = 1;
   }
-  if (auto v = t["profiles"]) {
-    // The profiles the device has: any of "horner", "hp", "user", "cia402" (default: the
-    // first three).
-    auto* list = v.as_array();
-    if (!list) bad("profiles", "must be a list of \"horner\", \"hp\", \"user\", \"cia402\"");
-    DeviceLayout& l = cfg.options.layout;
-    l.horner = l.hp = l.user = l.cia402 = false;
-    for (const auto& item : *list) {
-      auto name = item.value<std::string>();
-      if (name && *name == "horner") l.horner = true;
-      else if (name && *name == "hp") l.hp = true;
-      else if (name && *name == "user") l.user = true;
-      else if (name && *name == "cia402") l.cia402 = true;
-      else bad("profiles", "must be a list of \"horner\", \"hp\", \"user\", \"cia402\"");
-    }
-  }
-  if (auto v = t["serial_number"]) {
-    auto n = v.value<int64_t>();
-    if (!n || *n < 0 || *n > 0xFFFFFFFFll) bad("serial_number", "must be an integer 0..4294967295");
-    cfg.options.device.serial_number = static_cast<uint32_t>(*n);
-  }
-  if (auto v = t["log_level"]) {
-    if (!v.is_string()) bad("log_level", "must be a string");
-    cfg.log_level = *v.value<std::string>();
-  }
-  if (auto defaults = t["defaults"].as_table()) {
-    for (const auto& [key, value] : *defaults) {
-      std::string text;
-      if (auto i = value.value<int64_t>()) text = std::to_string(*i);
-      else if (auto s = value.value<std::string>()) text = *s;
-      else if (auto d = value.value<double>()) text = std::to_string(*d);
-      else bad("defaults." + std::string(key.str()), "must be an integer, number or string");
-      cfg.object_defaults.emplace_back(std::string(key.str()), text);
-    }
-  }
+  load_profiles(file, cfg.options.layout);
+  if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll)) cfg.options.device.serial_number = static_cast<uint32_t>(*n);
+  if (auto level = file.string("log_level")) cfg.log_level = *level;
+  load_object_defaults(file, cfg);
   return id_set;
 }
 
 }  // namespace
-
-std::string one_line(std::string_view text) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (c == '\n' || c == '\r' || c == '\t') {
-      out += ' ';
-    } else if (c < 0x20 || c >= 0x7F) {
-      char esc[8];
-      std::snprintf(esc, sizeof esc, "\\x%02X", c);
-      out += esc;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out;
-}
 
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
   NodeConfig cfg;
@@ -164,11 +128,9 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   }
   bool id_known = app.count("--node-id") > 0;
   if (!config_file.empty()) {
-    if (!std::filesystem::is_regular_file(config_file))
-      throw UsageError("config " + config_file + ": cannot read file");
     // "--node-id none" gives no id: the config file's applies (after one stored over LSS).
     const bool id_given = id_known && node_id != "none" && node_id != "255";
-    id_known |= load_config_file(config_file, cfg, !cfg.iface.empty(), id_given, !state_dir.empty());
+    id_known |= load_config_file(config_file, cfg, {!cfg.iface.empty(), id_given, !state_dir.empty()});
   }
   if (app.count("--node-id")) {
     int id = -1;

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "config/toml_file.hpp"
 #include "node/canopen_node.hpp"
 
 namespace stepnode::node {
@@ -21,19 +22,16 @@ struct NodeConfig {
   bool print_eds = false;
 };
 
-// Thrown for bad input; the process prints "stepnode: <message>" and exits with status 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// Bad input (an argument, the config file): the process prints "stepnode: <message>" and
+// exits with status 2.
+using config::UsageError;
 
 // Parses argv (and the config file it names). For --help, sets exit_now and exit_code
 // (the text is printed). Throws UsageError with one clear line on bad input.
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code);
 
-// `text` as one printable line: line breaks and tabs become spaces, other control bytes
-// and bytes outside ASCII become \xNN (toml++ copies the offending bytes of a file into
-// its message; stderr gets one line whatever the file held).
-std::string one_line(std::string_view text);
+// `text` as one printable line (control bytes as \xNN): the messages stderr gets.
+using config::one_line;
 
 // A PDO mapping record the configuration set to something the mapping procedure refuses
 // (e.g. "1A00:1" = 0x99990020 names an object this device does not have).

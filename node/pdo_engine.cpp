@@ -26,9 +26,9 @@ void PdoEngine::reload(uint64_t now_us) {
   tpdos_.resize(count_);
   for (unsigned n = 0; n < count_; ++n) {
     Rpdo& r = rpdos_[n];
-    uint16_t rc = static_cast<uint16_t>(0x1400 + n);
+    uint16_t rc = od::rpdo_parameter(n);
     uint32_t rid = dictionary_.get<uint32_t>(rc, 1);
-    r.mapping = read_mapping(dictionary_, static_cast<uint16_t>(0x1600 + n));
+    r.mapping = read_mapping(dictionary_, od::rpdo_mapping(n));
     r.bytes = od::mapping_bytes(r.mapping);
     // A PDO with nothing mapped carries no data: it stays silent (CiA 301 7.5.2.36).
     r.valid = !(rid & kInvalid) && !r.mapping.empty();
@@ -41,10 +41,10 @@ void PdoEngine::reload(uint64_t now_us) {
     }
 
     Tpdo& t = tpdos_[n];
-    uint16_t tc = static_cast<uint16_t>(0x1800 + n);
+    uint16_t tc = od::tpdo_parameter(n);
     uint32_t tid = dictionary_.get<uint32_t>(tc, 1);
     bool was_valid = t.valid;
-    t.mapping = read_mapping(dictionary_, static_cast<uint16_t>(0x1A00 + n));
+    t.mapping = read_mapping(dictionary_, od::tpdo_mapping(n));
     t.valid = !(tid & kInvalid) && !t.mapping.empty();
     t.cob_id = tid & 0x7FF;
     t.type = dictionary_.get<uint8_t>(tc, 2);

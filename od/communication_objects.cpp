@@ -160,8 +160,8 @@ void add_store_restore(Dictionary& od) {
 // Communication + mapping parameters of one PDO, with the CiA 301 reconfiguration rules.
 void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   bool rx = dir == PdoDirection::Receive;
-  uint16_t comm_index = static_cast<uint16_t>((rx ? 0x1400 : 0x1800) + n);
-  uint16_t map_index = static_cast<uint16_t>((rx ? 0x1600 : 0x1A00) + n);
+  uint16_t comm_index = rx ? rpdo_parameter(n) : tpdo_parameter(n);
+  uint16_t map_index = rx ? rpdo_mapping(n) : tpdo_mapping(n);
   const char* kind = rx ? "RPDO" : "TPDO";
 
   // PDOs 1-4 have the pre-defined connection set IDs; the others start without an ID.

@@ -40,14 +40,21 @@ SdoAbort check_mapping(const Dictionary& dictionary, std::span<const uint32_t> w
 // Stored or configured records are loaded without the mapping procedure; this is its rule.
 SdoAbort check_mapping_record(const Dictionary& dictionary, uint16_t index);
 inline bool is_rpdo_mapping(uint16_t index) { return index >= 0x1600 && index <= 0x17FF; }
+// The records of PDO n (from 0): RPDO communication 0x1400+n and mapping 0x1600+n, TPDO
+// communication 0x1800+n and mapping 0x1A00+n.
+constexpr uint16_t rpdo_parameter(unsigned n) { return static_cast<uint16_t>(0x1400 + n); }
+constexpr uint16_t rpdo_mapping(unsigned n) { return static_cast<uint16_t>(0x1600 + n); }
+constexpr uint16_t tpdo_parameter(unsigned n) { return static_cast<uint16_t>(0x1800 + n); }
+constexpr uint16_t tpdo_mapping(unsigned n) { return static_cast<uint16_t>(0x1A00 + n); }
 inline bool is_tpdo_mapping(uint16_t index) { return index >= 0x1A00 && index <= 0x1BFF; }
 
 // A mapping entry (CiA 301 7.5.2.36): index << 16 | sub << 8 | length in bits.
 constexpr uint32_t mapping_word(uint16_t index, uint8_t sub, uint8_t bits) {
   return (static_cast<uint32_t>(index) << 16) | (static_cast<uint32_t>(sub) << 8) | bits;
 }
-// Makes `words` the default (and present) mapping of the record `map_index` (0x1600+n or
-// 0x1A00+n), with sub 0 their count: a profile's default PDOs.
+// Makes `words` the default (and present) mapping of the record `map_index`
+// (rpdo_mapping(n) or tpdo_mapping(n)), with sub 0 their count: a profile's default PDOs,
+// the one place they are built.
 void set_default_mapping(Dictionary& dictionary, uint16_t map_index, std::initializer_list<uint32_t> words);
 
 size_t mapping_bits(const PdoMapping& mapping);

@@ -14,7 +14,7 @@
 // requests are answered the same way, inside the bridge thread.
 //
 // A subscriber in a separate process (this program again, --subscriber, started before
-// the runs) reads AxisPosition with a RELIABLE KEEP_ALL reader and measures latency
+// the runs; bridge/bench/pipeline_subscriber.cpp) reads AxisPosition with a RELIABLE KEEP_ALL reader and measures latency
 // (now - can_time_ns) and loss (sequence numbers that never arrived); it reports over a
 // pipe.
 //
@@ -26,33 +26,23 @@
 // CPU: the publishing process's CPU time minus the generator thread's (so: bridge thread
 // plus every Fast DDS thread), and the bridge thread alone, over the run's wall time. RSS
 // is the process's VmRSS at the end of the run.
-#include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
-#include <fastdds/dds/subscriber/DataReaderListener.hpp>
-#include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <pthread.h>
-#include <spawn.h>
 #include <spdlog/spdlog.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
-#include <iostream>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -62,6 +52,8 @@
 
 #include <stepnodePubSubTypes.h>
 
+#include "bridge/bench/pipeline_bench.hpp"
+#include "bridge/bench/pipeline_queue.hpp"
 #include "bridge/dds/participant.hpp"
 #include "bridge/dds/publisher.hpp"
 #include "bridge/dds/qos.hpp"
@@ -69,14 +61,17 @@
 #include "bridge/observer/bus_observer.hpp"
 #include "bridge/observer/tests/fake_node.hpp"
 
-extern char** environ;
-
 using namespace stepnode;
 namespace efd = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+
+using bench::FrameQueue;
+using bench::Item;
+using bench::process_cpu_s;
+using bench::RunRequest;
 
 constexpr uint32_t kTpdo2 = 0x280;
 constexpr int32_t kFirstSeq = 1'000'000;  // below: discovery snapshots, never counted
@@ -93,13 +88,6 @@ double clock_s(clockid_t clock) {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
-double process_cpu_s() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  auto tv = [](const timeval& t) { return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6; };
-  return tv(ru.ru_utime) + tv(ru.ru_stime);
-}
-
 long status_kb(const char* key) {
   std::ifstream status("/proc/self/status");
   std::string line;
@@ -109,309 +97,7 @@ long status_kb(const char* key) {
   return 0;
 }
 
-int64_t percentile(std::vector<int64_t>& sorted, double p) {
-  if (sorted.empty()) return 0;
-  size_t i = static_cast<size_t>(p * static_cast<double>(sorted.size() - 1) + 0.5);
-  return sorted[std::min(i, sorted.size() - 1)];
-}
-
-void register_axis_position(efd::DomainParticipant* participant, efd::Topic*& topic) {
-  bridge::dds::Naming naming;
-  const auto kind = bridge::dds::TopicKind::AxisPosition;
-  std::string type = bridge::dds::type_name(kind, naming);
-  if (bridge::dds::make_type_support(kind, naming).register_type(participant, type) != ReturnCode_t::RETCODE_OK)
-    throw std::runtime_error("type " + type + ": registration refused");
-  topic = participant->create_topic(bridge::dds::topic_name(kind, naming), type, efd::TOPIC_QOS_DEFAULT);
-  if (!topic) throw std::runtime_error("topic AxisPosition: Fast DDS could not create it");
-}
-
-// ------------------------------------------------------------------------ subscriber
-
-// Everything the reader took since the last "begin": first arrival latency per sequence
-// number of the announced range.
-class PositionListener : public efd::DataReaderListener {
- public:
-  void begin(int32_t first, int32_t end) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    first_ = first;
-    end_ = end;
-    seen_.assign(static_cast<size_t>(end - first), 0);
-    latencies_.clear();
-    latencies_.reserve(seen_.size());
-    duplicates_ = 0;
-    in_range_ = 0;
-  }
-  void on_data_available(efd::DataReader* reader) override {
-    efd::LoanableSequence<::stepnode::AxisPosition> data;
-    efd::SampleInfoSeq infos;
-    while (reader->take(data, infos) == ReturnCode_t::RETCODE_OK) {
-      const auto now = static_cast<int64_t>(bridge::dds::realtime_ns());
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        for (efd::LoanableCollection::size_type i = 0; i < infos.length(); ++i) {
-          if (!infos[i].valid_data) continue;
-          const ::stepnode::AxisPosition& p = data[i];
-          const int32_t seq = p.motor_position();
-          ++taken_;
-          if (seq < first_ || seq >= end_) continue;
-          uint8_t& seen = seen_[static_cast<size_t>(seq - first_)];
-          if (seen) {
-            ++duplicates_;
-            continue;
-          }
-          seen = 1;
-          ++in_range_;
-          latencies_.push_back(now - static_cast<int64_t>(p.can_time_ns()));
-        }
-      }
-      reader->return_loan(data, infos);
-    }
-  }
-  // Copies out under the lock.
-  void snapshot(uint64_t& taken, uint64_t& in_range, uint64_t& duplicates, std::vector<int64_t>* latencies) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    taken = taken_;
-    in_range = in_range_;
-    duplicates = duplicates_;
-    if (latencies) *latencies = latencies_;
-  }
-
- private:
-  std::mutex mutex_;
-  int32_t first_ = 0, end_ = 0;
-  std::vector<uint8_t> seen_;
-  std::vector<int64_t> latencies_;
-  uint64_t taken_ = 0, in_range_ = 0, duplicates_ = 0;
-};
-
-// Commands on stdin, one answer line each on stdout:
-//   begin FIRST END   -> "ok"            (a run of sequence numbers [FIRST, END) follows)
-//   report            -> "result RECEIVED DUPLICATES P50_NS P99_NS MAX_NS CPU_S"
-//                        once all arrived, or nothing new came for 500 ms
-//   quit
-int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth, uint32_t port_queue) {
-  if (port_queue > 0) {
-    // The reader side's shared-memory port: the ring of datagram descriptors the writers
-    // push into (Fast DDS default 512, 0.5 MB segment). Full means dropped; a subscriber
-    // descheduled for a few ms at 80,000 samples/s overflows the default.
-    std::string xml = R"(<?xml version="1.0" encoding="UTF-8"?>
-<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"><profiles>
-<transport_descriptors>
-<transport_descriptor><transport_id>bench_shm</transport_id><type>SHM</type>
-<segment_size>)" + std::to_string(std::max<uint32_t>(512 * 1024, port_queue * 512)) +
-                      R"(</segment_size><port_queue_capacity>)" + std::to_string(port_queue) + R"(</port_queue_capacity>
-</transport_descriptor>
-<transport_descriptor><transport_id>bench_udp</transport_id><type>UDPv4</type></transport_descriptor>
-</transport_descriptors>
-<participant profile_name=")" + std::string(bridge::dds::kParticipantProfile) + R"("><rtps>
-<userTransports><transport_id>bench_shm</transport_id><transport_id>bench_udp</transport_id></userTransports>
-<useBuiltinTransports>false</useBuiltinTransports></rtps></participant>
-</profiles></dds>)";
-    if (efd::DomainParticipantFactory::get_instance()->load_XML_profiles_string(xml.c_str(), xml.size()) !=
-        ReturnCode_t::RETCODE_OK)
-      throw std::runtime_error("subscriber: Fast DDS rejected the port queue profile");
-  }
-  bridge::dds::ParticipantOptions po;
-  po.domain = domain;
-  po.profiles_file = profiles;
-  po.name = "pipeline_bench subscriber";
-  efd::DomainParticipant* participant = bridge::dds::create_participant(po);
-  efd::Topic* topic = nullptr;
-  register_axis_position(participant, topic);
-  efd::Subscriber* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
-  // RELIABLE; KEEP_ALL (depth 0) with room for more than the listener ever leaves
-  // untaken, or KEEP_LAST depth per instance.
-  efd::DataReaderQos qos = bridge::dds::builtin_reader_qos(bridge::dds::TopicKind::AxisPosition, false, 1);
-  const int32_t per_instance = depth > 0 ? depth : 100'000;
-  qos.history().kind = depth > 0 ? efd::KEEP_LAST_HISTORY_QOS : efd::KEEP_ALL_HISTORY_QOS;
-  qos.history().depth = per_instance;
-  qos.resource_limits().max_instances = 128;  // Fast DDS: max_samples >= instances x per instance
-  qos.resource_limits().max_samples_per_instance = per_instance;
-  qos.resource_limits().max_samples = 128 * per_instance;
-  qos.resource_limits().allocated_samples = std::min(per_instance, 4096);
-  PositionListener listener;
-  efd::DataReader* reader = subscriber->create_datareader(topic, qos, &listener);
-  if (!reader) throw std::runtime_error("subscriber: Fast DDS refused the reader QoS");
-  std::cout << "ready" << std::endl;
-
-  std::string line;
-  int32_t first = 0, end = 0;
-  double cpu_at_begin = 0;
-  while (std::getline(std::cin, line)) {
-    std::istringstream in(line);
-    std::string cmd;
-    in >> cmd;
-    if (cmd == "begin") {
-      in >> first >> end;
-      listener.begin(first, end);
-      cpu_at_begin = process_cpu_s();
-      std::cout << "ok" << std::endl;
-    } else if (cmd == "report") {
-      const auto expected = static_cast<uint64_t>(end - first);
-      uint64_t taken = 0, in_range = 0, dups = 0, last_taken = ~0ull;
-      auto last_change = Clock::now();
-      const auto give_up = Clock::now() + std::chrono::seconds(30);
-      for (;;) {
-        listener.snapshot(taken, in_range, dups, nullptr);
-        if (in_range >= expected || Clock::now() > give_up) break;
-        if (taken != last_taken) {
-          last_taken = taken;
-          last_change = Clock::now();
-        } else if (Clock::now() - last_change > std::chrono::milliseconds(500)) {
-          break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-      }
-      std::vector<int64_t> lat;
-      listener.snapshot(taken, in_range, dups, &lat);
-      std::sort(lat.begin(), lat.end());
-      std::cout << "result " << in_range << ' ' << dups << ' ' << percentile(lat, 0.5) << ' ' << percentile(lat, 0.99)
-                << ' ' << (lat.empty() ? 0 : lat.back()) << ' ' << process_cpu_s() - cpu_at_begin << std::endl;
-    } else if (cmd == "quit") {
-      break;
-    }
-  }
-  reader->set_listener(nullptr);
-  bridge::dds::delete_participant(participant);
-  return 0;
-}
-
-// ------------------------------------------------------------------------ publisher side
-
-struct Item {
-  od::CanFrame frame;
-  uint64_t can_time_ns = 0;
-};
-
-// Generator -> bridge thread, like a socket: the bridge thread sleeps until something is
-// queued (or its tick is due) and then takes everything waiting at once.
-class FrameQueue {
- public:
-  void push(std::vector<Item>& batch) {
-    if (batch.empty()) return;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      items_.insert(items_.end(), batch.begin(), batch.end());
-      pushed_ += batch.size();
-    }
-    batch.clear();
-    cv_.notify_one();
-  }
-  // False when stopped. `out` gets every queued item (may be none at the deadline).
-  bool take(std::vector<Item>& out, Clock::time_point deadline) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait_until(lock, deadline, [&] { return stop_ || !items_.empty(); });
-    if (stop_) return false;
-    max_backlog_ = std::max(max_backlog_, items_.size());
-    out.swap(items_);
-    return true;
-  }
-  void stop() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    cv_.notify_one();
-  }
-  uint64_t pushed() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return pushed_;
-  }
-  size_t take_max_backlog() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return std::exchange(max_backlog_, 0);
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::vector<Item> items_;
-  uint64_t pushed_ = 0;
-  size_t max_backlog_ = 0;
-  bool stop_ = false;
-};
-
 enum class Mode : int { Bridged, Alone };
-
-// A run the main thread asks the generator for.
-struct RunRequest {
-  std::atomic<int> phase{0};  // 0 idle, 1 requested, 2 running, 3 done
-  int rate = 0;
-  int64_t total = 0;
-  int32_t first_seq = 0;
-};
-
-class Subscriber {
- public:
-  Subscriber(const std::string& exe, uint32_t domain, const std::string& profiles, int32_t depth,
-             uint32_t port_queue) {
-    int to_child[2], from_child[2];
-    if (pipe(to_child) != 0 || pipe(from_child) != 0) throw std::runtime_error("pipe failed");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, to_child[0], 0);
-    posix_spawn_file_actions_adddup2(&actions, from_child[1], 1);
-    posix_spawn_file_actions_addclose(&actions, to_child[1]);
-    posix_spawn_file_actions_addclose(&actions, from_child[0]);
-    std::vector<std::string> args{exe,           "--subscriber",        "--domain", std::to_string(domain),
-                                  "--reader-depth", std::to_string(depth), "--sub-port-queue",
-                                  std::to_string(port_queue)};
-    if (!profiles.empty()) args.insert(args.end(), {"--profiles", profiles});
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int rc = posix_spawn(&pid_, exe.c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    close(to_child[0]);
-    close(from_child[1]);
-    if (rc != 0) throw std::runtime_error("cannot start the subscriber: " + std::string(std::strerror(rc)));
-    out_ = fdopen(to_child[1], "w");
-    in_ = fdopen(from_child[0], "r");
-    if (expect_line() != "ready") throw std::runtime_error("subscriber did not start");
-  }
-  ~Subscriber() {
-    std::fputs("quit\n", out_);
-    std::fclose(out_);
-    std::fclose(in_);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-  }
-  Subscriber(const Subscriber&) = delete;
-  Subscriber& operator=(const Subscriber&) = delete;
-
-  void begin(int32_t first, int32_t end) {
-    std::fprintf(out_, "begin %d %d\n", first, end);
-    std::fflush(out_);
-    expect_line();
-  }
-  struct Result {
-    uint64_t received = 0, duplicates = 0;
-    int64_t p50 = 0, p99 = 0, max = 0;
-    double cpu_s = 0;
-  };
-  Result report() {
-    std::fputs("report\n", out_);
-    std::fflush(out_);
-    std::istringstream in(expect_line());
-    std::string word;
-    Result r;
-    in >> word >> r.received >> r.duplicates >> r.p50 >> r.p99 >> r.max >> r.cpu_s;
-    if (word != "result") throw std::runtime_error("subscriber: unexpected answer");
-    return r;
-  }
-
- private:
-  std::string expect_line() {
-    char buf[512];
-    if (!std::fgets(buf, sizeof buf, in_)) throw std::runtime_error("subscriber exited");
-    std::string s(buf);
-    while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
-    return s;
-  }
-  pid_t pid_ = 0;
-  FILE* out_ = nullptr;
-  FILE* in_ = nullptr;
-};
 
 // Feeds the observer what a node would answer until it has nothing more to ask.
 void answer_sdo(std::vector<std::unique_ptr<bridge::test::FakeNode>>& nodes, bridge::BusObserver& observer,
@@ -444,156 +130,241 @@ struct Options {
   uint32_t sub_port_queue = 0;
 };
 
-int run_publisher(const Options& opt, const std::string& exe) {
-  // The subscriber first: it is up (and discovering) while this side starts.
-  Subscriber sub(exe, opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
+// One run's figures, as the table prints them.
+struct Measured {
+  int64_t total = 0, lost = 0;
+  double gen_wall = 0, wall = 0;     // s: the generator's run, until the bridge thread caught up
+  double proc_s = 0, bridge_s = 0, gen_s = 0;  // CPU s: process minus generator, bridge thread, generator
+  long rss_kb = 0;
+  size_t backlog = 0;
+  uint64_t write_failures = 0;
+  bench::SubscriberProcess::Result sub;
+};
 
-  bridge::dds::PublisherOptions po;
-  po.participant.domain = opt.domain;
-  po.participant.profiles_file = opt.profiles;
-  po.participant.name = "pipeline_bench bridge";
-  bridge::dds::DdsPublisher publisher(po);
+// The publishing side: the bridge (BusObserver + DdsPublisher) and Fast DDS alone, the
+// nodes it discovered, the bridge thread and the generator thread.
+class Pipeline {
+ public:
+  explicit Pipeline(const Options& opt) : opt_(opt), publisher_(publisher_options(opt)), observer_(publisher_, {}) {
+    create_alone_writer();
+    discover_nodes();
+    bridge_thread_ = std::thread([this] { bridge_loop(); });
+    generator_ = std::thread([this] { generator_loop(); });
+    pthread_getcpuclockid(generator_.native_handle(), &generator_clock_);
+    pthread_getcpuclockid(bridge_thread_.native_handle(), &bridge_clock_);
+  }
+  ~Pipeline() {
+    quit_ = true;
+    generator_.join();
+    queue_.stop();
+    bridge_thread_.join();
+    bridge::dds::delete_participant(alone_participant_);
+  }
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Both writers must see the subscriber before anything is measured.
+  void wait_for_subscriber() {
+    efd::PublicationMatchedStatus alone_matched;
+    for (int i = 0; i < 1000; ++i) {
+      alone_writer_->get_publication_matched_status(alone_matched);
+      if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) > 0 && alone_matched.current_count > 0)
+        break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) == 0 || alone_matched.current_count == 0)
+      throw std::runtime_error("the subscriber did not match both writers within 10 s");
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+
+  // One run of `rate` frames a second in mode `md`, sequence numbers from `next_seq` on.
+  Measured measure(int rate, Mode md, bench::SubscriberProcess& sub, int32_t& next_seq) {
+    Measured m;
+    mode_.store(static_cast<int>(md));
+    m.total = static_cast<int64_t>(rate * opt_.seconds);
+    run_.rate = rate;
+    run_.total = m.total;
+    run_.first_seq = next_seq;
+    sub.begin(next_seq, next_seq + static_cast<int32_t>(m.total));
+    next_seq += static_cast<int32_t>(m.total);
+    const uint64_t failures_before = publisher_.write_failures() + alone_failures_.load();
+    queue_.take_max_backlog();
+    const double cpu0 = process_cpu_s(), gen0 = clock_s(generator_clock_), br0 = clock_s(bridge_clock_);
+    const auto t0 = Clock::now();
+    run_.phase.store(1, std::memory_order_release);
+    while (run_.phase.load(std::memory_order_acquire) != 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    m.gen_wall = std::chrono::duration<double>(Clock::now() - t0).count();
+    while (processed_.load(std::memory_order_acquire) < queue_.pushed())
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    m.wall = std::chrono::duration<double>(Clock::now() - t0).count();
+    const double cpu1 = process_cpu_s(), gen1 = clock_s(generator_clock_), br1 = clock_s(bridge_clock_);
+    m.rss_kb = status_kb("VmRSS:");
+    m.backlog = queue_.take_max_backlog();
+    run_.phase.store(0);
+    m.sub = sub.report();
+    m.write_failures = publisher_.write_failures() + alone_failures_.load() - failures_before;
+    m.lost = m.total - static_cast<int64_t>(m.sub.received);
+    m.gen_s = gen1 - gen0;
+    m.proc_s = (cpu1 - cpu0) - m.gen_s;
+    m.bridge_s = br1 - br0;
+    return m;
+  }
+
+ private:
+  static bridge::dds::PublisherOptions publisher_options(const Options& opt) {
+    bridge::dds::PublisherOptions po;
+    po.participant.domain = opt.domain;
+    po.participant.profiles_file = opt.profiles;
+    po.participant.name = "pipeline_bench bridge";
+    return po;
+  }
 
   // Fast DDS alone: its own participant, one writer, the same QoS as the bridge's
   // AxisPosition writer (built-in, or the profile's when --profiles has one).
-  bridge::dds::ParticipantOptions alone_po;
-  alone_po.domain = opt.domain;
-  alone_po.name = "pipeline_bench alone";
-  efd::DomainParticipant* alone_participant = bridge::dds::create_participant(alone_po);
-  efd::Topic* alone_topic = nullptr;
-  register_axis_position(alone_participant, alone_topic);
-  efd::Publisher* alone_publisher = alone_participant->create_publisher(efd::PUBLISHER_QOS_DEFAULT);
-  efd::DataWriter* alone_writer = alone_publisher->create_datawriter(
-      alone_topic, bridge::dds::writer_qos(bridge::dds::TopicKind::AxisPosition, false, *alone_publisher));
-  if (!alone_writer) throw std::runtime_error("alone: Fast DDS refused the writer QoS");
+  void create_alone_writer() {
+    bridge::dds::ParticipantOptions alone_po;
+    alone_po.domain = opt_.domain;
+    alone_po.name = "pipeline_bench alone";
+    alone_participant_ = bridge::dds::create_participant(alone_po);
+    efd::Topic* alone_topic = bench::register_axis_position(alone_participant_);
+    efd::Publisher* alone_publisher = alone_participant_->create_publisher(efd::PUBLISHER_QOS_DEFAULT);
+    alone_writer_ = alone_publisher->create_datawriter(
+        alone_topic, bridge::dds::writer_qos(bridge::dds::TopicKind::AxisPosition, false, *alone_publisher));
+    if (!alone_writer_) throw std::runtime_error("alone: Fast DDS refused the writer QoS");
+  }
 
   // Nodes 1..N, one axis each, discovered over SDO like on a bus.
-  bridge::ObserverConfig oc;
-  bridge::BusObserver observer(publisher, oc);
-  std::vector<std::unique_ptr<bridge::test::FakeNode>> nodes;
-  std::vector<od::CanFrame> out;
-  for (int id = 1; id <= opt.nodes; ++id) {
-    nodes.push_back(std::make_unique<bridge::test::FakeNode>(
-        bridge::test::FakeNodeOptions{.id = static_cast<uint8_t>(id), .axes = 1}));
-    auto& n = *nodes.back();
-    bridge::ObservedFrame boot;
-    boot.frame = n.boot_up();
-    boot.can_time_ns = bridge::dds::realtime_ns();
-    observer.on_frame(boot, monotonic_us(), out);
-    answer_sdo(nodes, observer, out);
-    if (!observer.node_health(n.id(), monotonic_us()).discovered)
-      throw std::runtime_error("node " + std::to_string(id) + " was not discovered");
+  void discover_nodes() {
+    std::vector<od::CanFrame> out;
+    for (int id = 1; id <= opt_.nodes; ++id) {
+      nodes_.push_back(std::make_unique<bridge::test::FakeNode>(
+          bridge::test::FakeNodeOptions{.id = static_cast<uint8_t>(id), .axes = 1}));
+      auto& n = *nodes_.back();
+      bridge::ObservedFrame boot;
+      boot.frame = n.boot_up();
+      boot.can_time_ns = bridge::dds::realtime_ns();
+      observer_.on_frame(boot, monotonic_us(), out);
+      answer_sdo(nodes_, observer_, out);
+      if (!observer_.node_health(n.id(), monotonic_us()).discovered)
+        throw std::runtime_error("node " + std::to_string(id) + " was not discovered");
+    }
+    // TPDO2 of axis 1 must be motor position (bytes 0..3) then encoder position: check it
+    // on the real dictionary, so the generator can write the sequence number into bytes 0..3.
+    nodes_[0]->set_position(0, 0x12345678, 0);
+    od::CanFrame probe = nodes_[0]->tpdo(1);
+    if (probe.id != kTpdo2 + 1 || probe.dlc != 8 || od::get_u32(probe.data.data()) != 0x12345678u)
+      throw std::runtime_error("TPDO2 is not motor position + encoder position on 0x281");
   }
-  // TPDO2 of axis 1 must be motor position (bytes 0..3) then encoder position: check it
-  // on the real dictionary, so the generator can write the sequence number into bytes 0..3.
-  nodes[0]->set_position(0, 0x12345678, 0);
-  od::CanFrame probe = nodes[0]->tpdo(1);
-  if (probe.id != kTpdo2 + 1 || probe.dlc != 8 || od::get_u32(probe.data.data()) != 0x12345678u)
-    throw std::runtime_error("TPDO2 is not motor position + encoder position on 0x281");
 
-  FrameQueue queue;
-  RunRequest run;
-  std::atomic<int> mode{static_cast<int>(Mode::Bridged)};
-  std::atomic<uint64_t> processed{0};
-  std::atomic<uint64_t> alone_failures{0};
-  std::atomic<bool> quit{false};
+  // Mode alone: the AxisPosition sample the bridge would publish for a TPDO2, written
+  // straight to the alone writer.
+  void write_alone(const Item& it) {
+    ::stepnode::AxisPosition d;
+    d.node(static_cast<uint8_t>(it.frame.id & 0x7F));
+    d.axis(1);
+    d.motor_position(static_cast<int32_t>(od::get_u32(it.frame.data.data())));
+    d.encoder_position(static_cast<int32_t>(od::get_u32(&it.frame.data[4])));
+    d.motor_user_units(d.motor_position());
+    d.encoder_user_units(d.encoder_position());
+    d.can_time_ns(it.can_time_ns);
+    d.publish_time_ns(bridge::dds::realtime_ns());
+    if (alone_writer_->write(&d, efd::HANDLE_NIL) != ReturnCode_t::RETCODE_OK) ++alone_failures_;
+  }
 
   // The bridge thread: stepbridge's loop with a queue in place of the socket.
-  std::thread bridge_thread([&] {
+  void bridge_loop() {
     std::vector<Item> batch;
     std::vector<od::CanFrame> sdo_out;
     const auto tick = std::chrono::milliseconds(10);
     auto next_tick = Clock::now() + tick;
     while (true) {
       batch.clear();
-      if (!queue.take(batch, next_tick)) break;
-      const bool alone = mode.load(std::memory_order_relaxed) == static_cast<int>(Mode::Alone);
+      if (!queue_.take(batch, next_tick)) break;
+      const bool alone = mode_.load(std::memory_order_relaxed) == static_cast<int>(Mode::Alone);
       for (const Item& it : batch) {
         if (alone && (it.frame.id & 0x780) == kTpdo2) {
-          ::stepnode::AxisPosition d;
-          d.node(static_cast<uint8_t>(it.frame.id & 0x7F));
-          d.axis(1);
-          d.motor_position(static_cast<int32_t>(od::get_u32(&it.frame.data[0])));
-          d.encoder_position(static_cast<int32_t>(od::get_u32(&it.frame.data[4])));
-          d.motor_user_units(d.motor_position());
-          d.encoder_user_units(d.encoder_position());
-          d.can_time_ns(it.can_time_ns);
-          d.publish_time_ns(bridge::dds::realtime_ns());
-          if (alone_writer->write(&d, efd::HANDLE_NIL) != ReturnCode_t::RETCODE_OK) ++alone_failures;
+          write_alone(it);
           continue;
         }
         bridge::ObservedFrame of;
         of.frame = it.frame;
         of.can_time_ns = it.can_time_ns;
-        observer.on_frame(of, monotonic_us(), sdo_out);
-        answer_sdo(nodes, observer, sdo_out);
+        observer_.on_frame(of, monotonic_us(), sdo_out);
+        answer_sdo(nodes_, observer_, sdo_out);
       }
-      processed.fetch_add(batch.size(), std::memory_order_release);
+      processed_.fetch_add(batch.size(), std::memory_order_release);
       if (Clock::now() >= next_tick) {
-        observer.on_tick(monotonic_us(), bridge::dds::realtime_ns(), sdo_out);
-        answer_sdo(nodes, observer, sdo_out);
+        observer_.on_tick(monotonic_us(), bridge::dds::realtime_ns(), sdo_out);
+        answer_sdo(nodes_, observer_, sdo_out);
         next_tick += tick;
         if (next_tick < Clock::now()) next_tick = Clock::now() + tick;
       }
     }
-  });
+  }
 
   // The generator: heartbeats every 100 ms always, TPDO2 frames when a run is requested.
-  std::thread generator([&] {
+  void generator_loop() {
     std::vector<Item> batch;
     auto next_heartbeat = Clock::now();
     Clock::time_point start;
     int64_t sent = 0;
     int32_t seq = 0;
-    const auto slice = std::chrono::microseconds(opt.slice_us);
-    while (!quit.load()) {
+    const auto slice = std::chrono::microseconds(opt_.slice_us);
+    while (!quit_.load()) {
       const auto now = Clock::now();
       if (now >= next_heartbeat) {
-        for (auto& n : nodes) batch.push_back({n->heartbeat(0x05), bridge::dds::realtime_ns()});
+        for (auto& n : nodes_) batch.push_back({n->heartbeat(0x05), bridge::dds::realtime_ns()});
         next_heartbeat += std::chrono::milliseconds(100);
       }
-      int phase = run.phase.load(std::memory_order_acquire);
+      int phase = run_.phase.load(std::memory_order_acquire);
       if (phase == 1) {
         start = now;
         sent = 0;
-        seq = run.first_seq;
-        run.phase.store(phase = 2);
+        seq = run_.first_seq;
+        run_.phase.store(phase = 2);
       }
       if (phase == 2) {
         const double elapsed = std::chrono::duration<double>(now - start).count();
-        const int64_t due = std::min<int64_t>(run.total, static_cast<int64_t>(elapsed * run.rate) + 1);
-        const uint64_t t = bridge::dds::realtime_ns();
-        for (; sent < due; ++sent, ++seq) {
-          const auto node = static_cast<uint32_t>(sent % static_cast<int64_t>(nodes.size())) + 1;
-          Item it;
-          it.frame.id = kTpdo2 + node;
-          it.frame.dlc = 8;
-          od::put_u32(&it.frame.data[0], static_cast<uint32_t>(seq));
-          it.can_time_ns = t;
-          batch.push_back(it);
-        }
-        if (sent == run.total) run.phase.store(3, std::memory_order_release);
+        const int64_t due = std::min<int64_t>(run_.total, static_cast<int64_t>(elapsed * run_.rate) + 1);
+        append_tpdos(batch, sent, due, seq);
+        if (sent == run_.total) run_.phase.store(3, std::memory_order_release);
       }
-      queue.push(batch);
+      queue_.push(batch);
       std::this_thread::sleep_until(now + slice);
     }
-  });
-
-  // Both writers must see the subscriber before anything is measured.
-  efd::PublicationMatchedStatus alone_matched;
-  for (int i = 0; i < 1000; ++i) {
-    alone_writer->get_publication_matched_status(alone_matched);
-    if (publisher.matched_readers(bridge::dds::TopicKind::AxisPosition) > 0 && alone_matched.current_count > 0) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
-  if (publisher.matched_readers(bridge::dds::TopicKind::AxisPosition) == 0 || alone_matched.current_count == 0)
-    throw std::runtime_error("the subscriber did not match both writers within 10 s");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
 
-  clockid_t generator_clock{}, bridge_clock{};
-  pthread_getcpuclockid(generator.native_handle(), &generator_clock);
-  pthread_getcpuclockid(bridge_thread.native_handle(), &bridge_clock);
+  // TPDO2 frames `sent` up to `due`, round robin over the nodes, stamped now.
+  void append_tpdos(std::vector<Item>& batch, int64_t& sent, int64_t due, int32_t& seq) const {
+    const uint64_t t = bridge::dds::realtime_ns();
+    for (; sent < due; ++sent, ++seq) {
+      const auto node = static_cast<uint32_t>(sent % static_cast<int64_t>(nodes_.size())) + 1;
+      Item it;
+      it.frame.id = kTpdo2 + node;
+      it.frame.dlc = 8;
+      od::put_u32(it.frame.data.data(), static_cast<uint32_t>(seq));
+      it.can_time_ns = t;
+      batch.push_back(it);
+    }
+  }
 
+  const Options& opt_;
+  bridge::dds::DdsPublisher publisher_;
+  bridge::BusObserver observer_;
+  efd::DomainParticipant* alone_participant_ = nullptr;
+  efd::DataWriter* alone_writer_ = nullptr;
+  std::vector<std::unique_ptr<bridge::test::FakeNode>> nodes_;
+  FrameQueue queue_;
+  RunRequest run_;
+  std::atomic<int> mode_{static_cast<int>(Mode::Bridged)};
+  std::atomic<uint64_t> processed_{0};
+  std::atomic<uint64_t> alone_failures_{0};
+  std::atomic<bool> quit_{false};
+  std::thread bridge_thread_, generator_;
+  clockid_t generator_clock_{}, bridge_clock_{};
+};
+
+void print_table_head(const Options& opt) {
   std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d --sub-port-queue %u%s%s\n",
               opt.domain, opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.sub_port_queue,
               opt.profiles.empty() ? "" : " --profiles ", opt.profiles.c_str());
@@ -607,7 +378,27 @@ int run_publisher(const Options& opt, const std::string& exe) {
   std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "", "", "", "", "", "", "",
               "", "", "", "", "", "us/smp", "us/smp", "", "");
   std::fflush(stdout);
+}
 
+void print_row(int rate, const std::string& mode, const Measured& m) {
+  const bench::SubscriberProcess::Result& r = m.sub;
+  const auto samples = static_cast<double>(m.total);
+  std::printf("%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %6.1f %7.1f %6.1f %6.1f | %6.2f %6.2f | %6.1f %7zu%s\n",
+              rate, mode.c_str(), samples / m.gen_wall, static_cast<long long>(m.total), static_cast<long long>(m.lost),
+              static_cast<double>(r.p50) / 1e3, static_cast<double>(r.p99) / 1e3, static_cast<double>(r.max) / 1e3,
+              100.0 * m.proc_s / m.wall, 100.0 * m.bridge_s / m.wall, 100.0 * r.cpu_s / m.wall,
+              100.0 * m.gen_s / m.wall, 1e6 * m.proc_s / samples, 1e6 * r.cpu_s / samples,
+              static_cast<double>(m.rss_kb) / 1024.0, m.backlog,
+              m.write_failures ? (" write failures " + std::to_string(m.write_failures)).c_str() : "");
+  std::fflush(stdout);
+}
+
+int run_publisher(const Options& opt, const std::string& exe) {
+  // The subscriber first: it is up (and discovering) while this side starts.
+  bench::SubscriberProcess sub(exe, opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
+  Pipeline pipeline(opt);
+  pipeline.wait_for_subscriber();
+  print_table_head(opt);
   struct Best {
     int bridged = 0, alone = 0;
   } best;
@@ -615,42 +406,10 @@ int run_publisher(const Options& opt, const std::string& exe) {
   for (int rate : opt.rates) {
     for (const std::string& m : opt.modes) {
       const Mode md = m == "alone" ? Mode::Alone : Mode::Bridged;
-      mode.store(static_cast<int>(md));
-      const auto total = static_cast<int64_t>(rate * opt.seconds);
-      run.rate = rate;
-      run.total = total;
-      run.first_seq = next_seq;
-      sub.begin(next_seq, next_seq + static_cast<int32_t>(total));
-      next_seq += static_cast<int32_t>(total);
-      const uint64_t failures_before = publisher.write_failures() + alone_failures.load();
-      queue.take_max_backlog();
-      const double cpu0 = process_cpu_s(), gen0 = clock_s(generator_clock), br0 = clock_s(bridge_clock);
-      const auto t0 = Clock::now();
-      run.phase.store(1, std::memory_order_release);
-      while (run.phase.load(std::memory_order_acquire) != 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-      const double gen_wall = std::chrono::duration<double>(Clock::now() - t0).count();
-      while (processed.load(std::memory_order_acquire) < queue.pushed())
-        std::this_thread::sleep_for(std::chrono::microseconds(200));
-      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-      const double cpu1 = process_cpu_s(), gen1 = clock_s(generator_clock), br1 = clock_s(bridge_clock);
-      const long rss_kb = status_kb("VmRSS:");
-      const size_t backlog = queue.take_max_backlog();
-      run.phase.store(0);
-      const Subscriber::Result r = sub.report();
-      const uint64_t failures = publisher.write_failures() + alone_failures.load() - failures_before;
-      const int64_t lost = total - static_cast<int64_t>(r.received);
-      const double proc_s = (cpu1 - cpu0) - (gen1 - gen0);
-      const auto samples = static_cast<double>(total);
-      std::printf("%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %6.1f %7.1f %6.1f %6.1f | %6.2f %6.2f | %6.1f %7zu%s\n",
-                  rate, m.c_str(), samples / gen_wall, static_cast<long long>(total), static_cast<long long>(lost),
-                  static_cast<double>(r.p50) / 1e3, static_cast<double>(r.p99) / 1e3, static_cast<double>(r.max) / 1e3,
-                  100.0 * proc_s / wall, 100.0 * (br1 - br0) / wall, 100.0 * r.cpu_s / wall,
-                  100.0 * (gen1 - gen0) / wall, 1e6 * proc_s / samples, 1e6 * r.cpu_s / samples,
-                  static_cast<double>(rss_kb) / 1024.0, backlog,
-                  failures ? (" write failures " + std::to_string(failures)).c_str() : "");
-      std::fflush(stdout);
-      const bool ok = lost == 0 && static_cast<double>(r.p99) < opt.max_p99_ms * 1e6 &&
-                      static_cast<double>(total) / gen_wall > 0.95 * rate;
+      const Measured r = pipeline.measure(rate, md, sub, next_seq);
+      print_row(rate, m, r);
+      const bool ok = r.lost == 0 && static_cast<double>(r.sub.p99) < opt.max_p99_ms * 1e6 &&
+                      static_cast<double>(r.total) / r.gen_wall > 0.95 * rate;
       if (ok && md == Mode::Bridged) best.bridged = std::max(best.bridged, rate);
       if (ok && md == Mode::Alone) best.alone = std::max(best.alone, rate);
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -663,18 +422,10 @@ int run_publisher(const Options& opt, const std::string& exe) {
   };
   says("bridged", best.bridged);
   says("alone", best.alone);
-
-  quit = true;
-  generator.join();
-  queue.stop();
-  bridge_thread.join();
-  bridge::dds::delete_participant(alone_participant);
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int pipeline_bench(int argc, char** argv) {
   Options opt;
   opt.domain = 50 + static_cast<uint32_t>(getpid()) % 150;
   bool subscriber = false;
@@ -707,9 +458,20 @@ int main(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
-    if (subscriber) return run_subscriber(opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
+    if (subscriber) return bench::run_subscriber(opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
     return run_publisher(opt, "/proc/self/exe");
   } catch (const std::exception& e) {
+    std::fprintf(stderr, "pipeline_bench: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return pipeline_bench(argc, argv);
+  } catch (const std::exception& e) {  // the command line itself could not be built
     std::fprintf(stderr, "pipeline_bench: %s\n", e.what());
     return 1;
   }

@@ -87,17 +87,22 @@ static long drain(dds_entity_t reader, int is_status, long* valid) {
   return printed;
 }
 
-int main(int argc, char** argv) {
-  long domain = 0, count = 0, timeout_ms = 0;
-  int until_both = 0;
+struct options {
+  long domain, count, timeout_ms;
+  int until_both;
+};
+
+/* Parses the command line into `o`. Returns -1 to go on, or the exit status (0 for --help,
+   2 for a bad argument). */
+static int parse_options(int argc, char** argv, struct options* o) {
   for (int i = 1; i < argc; i++) {
     long* into = NULL;
     long max = 0;
-    if (!strcmp(argv[i], "--domain")) into = &domain, max = 232;
-    else if (!strcmp(argv[i], "--count")) into = &count, max = 1000000000L;
-    else if (!strcmp(argv[i], "--timeout-ms")) into = &timeout_ms, max = 3600000L;
+    if (!strcmp(argv[i], "--domain")) into = &o->domain, max = 232;
+    else if (!strcmp(argv[i], "--count")) into = &o->count, max = 1000000000L;
+    else if (!strcmp(argv[i], "--timeout-ms")) into = &o->timeout_ms, max = 3600000L;
     else if (!strcmp(argv[i], "--until-both")) {
-      until_both = 1;
+      o->until_both = 1;
       continue;
     } else if (!strcmp(argv[i], "--help")) {
       printf("usage: cyclone_sub [--domain N] [--count N] [--until-both] [--timeout-ms MS]\n");
@@ -112,6 +117,15 @@ int main(int argc, char** argv) {
     }
     i++;
   }
+  return -1;
+}
+
+int main(int argc, char** argv) {
+  struct options o = {0, 0, 0, 0};
+  int parsed = parse_options(argc, argv, &o);
+  if (parsed >= 0) return parsed;
+  const long domain = o.domain, count = o.count, timeout_ms = o.timeout_ms;
+  const int until_both = o.until_both;
   signal(SIGINT, on_signal);
   signal(SIGTERM, on_signal);
 

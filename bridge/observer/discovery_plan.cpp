@@ -105,6 +105,26 @@ ReadOutcome DiscoveryPlan::on_result(const od::SdoResult& result) {
   return outcome;  // Failed: the cursor stays, the same read is repeated
 }
 
+// 0x1008, VISIBLE_STRING; some devices pad with NULs. A name is short: a node that sends
+// kilobytes does not get them all republished in every NodeHealth. Cut at the first NUL;
+// VISIBLE_STRING is ISO 646, so any other byte becomes '?' (NodeHealth's string must be
+// valid UTF-8 for its readers, and printable).
+std::string DiscoveryPlan::device_name(const od::Bytes& d) {
+  size_t n = std::min<size_t>(d.size(), kMaxNameLength);
+  n = static_cast<size_t>(std::find(d.begin(), d.begin() + static_cast<long>(n), 0) - d.begin());
+  std::string name;
+  for (size_t i = 0; i < n; ++i) name += d[i] >= 0x20 && d[i] <= 0x7E ? static_cast<char>(d[i]) : '?';
+  return name;
+}
+
+// An HP channel's PSCALE (REAL64). A zero or non-finite scale would turn every position
+// into nonsense: 1.0 then, as for one that cannot be read.
+double DiscoveryPlan::pscale(const od::Bytes& d) {
+  double scale = 1.0;
+  if (d.size() == sizeof(double)) std::memcpy(&scale, d.data(), sizeof(double));
+  return (std::isfinite(scale) && scale != 0.0) ? scale : 1.0;
+}
+
 void DiscoveryPlan::value(const od::Bytes& d) {
   uint32_t v = 0;
   switch (phase_) {
@@ -131,17 +151,9 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       }
       if (++k_ > 4) phase_ = Phase::Name;
       return;
-    case Phase::Name: {
-      // VISIBLE_STRING; some devices pad with NULs. A name is short: a node that sends
-      // kilobytes does not get them all republished in every NodeHealth.
-      // Cut at the first NUL; VISIBLE_STRING is ISO 646, so any other byte becomes '?'
-      // (NodeHealth's string must be valid UTF-8 for its readers, and printable).
-      size_t n = std::min<size_t>(d.size(), kMaxNameLength);
-      n = static_cast<size_t>(std::find(d.begin(), d.begin() + static_cast<long>(n), 0) - d.begin());
-      info_.device_name.clear();
-      for (size_t i = 0; i < n; ++i) info_.device_name += d[i] >= 0x20 && d[i] <= 0x7E ? static_cast<char>(d[i]) : '?';
+    case Phase::Name:
+      info_.device_name = device_name(d);
       return after_name();
-    }
     case Phase::AxisProbe:
       info_.axes = static_cast<uint8_t>(k_ + 1);
       if (++k_ >= kMaxAxes) after_axes();
@@ -150,17 +162,13 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       info_.drive_axes = static_cast<uint8_t>(k_ + 1);
       if (++k_ >= kMaxAxes) after_drives();
       return;
-    case Phase::Pscale: {
-      double scale = 1.0;
-      if (d.size() == sizeof(double)) std::memcpy(&scale, d.data(), sizeof(double));
-      // A zero or non-finite scale would turn every position into nonsense: keep 1.0.
-      info_.pscale[k_] = (std::isfinite(scale) && scale != 0.0) ? scale : 1.0;
+    case Phase::Pscale:
+      info_.pscale[k_] = pscale(d);
       if (++k_ >= info_.axes) {
         phase_ = Phase::TpdoComm;
         k_ = 0;
       }
       return;
-    }
     case Phase::TpdoComm:
       // Bit 29: a 29-bit CAN-ID, which the bridge does not receive (and whose low 11 bits
       // would name another frame).
@@ -206,8 +214,7 @@ void DiscoveryPlan::absent() {
       return;
     case Phase::Identity:
       // No identity object at all: the other sub-indices are not there either.
-      if (k_ == 1) phase_ = Phase::Name;
-      else if (++k_ > 4) phase_ = Phase::Name;
+      if (k_ == 1 || ++k_ > 4) phase_ = Phase::Name;
       return;
     case Phase::Name: return after_name();
     case Phase::AxisProbe: return after_axes();

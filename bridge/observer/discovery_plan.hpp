@@ -75,6 +75,8 @@ class DiscoveryPlan {
     Done,
   };
   void value(const od::Bytes& data);
+  static std::string device_name(const od::Bytes& data);
+  static double pscale(const od::Bytes& data);
   void absent();
   void after_name();
   void after_axes();

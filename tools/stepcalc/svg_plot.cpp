@@ -49,99 +49,128 @@ std::vector<std::pair<double, double>> screen_points(const Curve& c, const Frame
     std::vector<std::pair<double, double>> thin;
     double stride = static_cast<double>(pts.size() - 1) / static_cast<double>(kMaxPlotPoints - 1);
     for (size_t k = 0; k < kMaxPlotPoints; ++k)
-      thin.push_back(pts[std::min(pts.size() - 1, static_cast<size_t>(std::llround(k * stride)))]);
+      thin.push_back(pts[std::min(pts.size() - 1, static_cast<size_t>(std::llround(static_cast<double>(k) * stride)))]);
     pts.swap(thin);
   }
   return pts;
 }
 
-}  // namespace
+// The plot area's corners: x from kX0 to kX1, y from kY0 (bottom) up to kY1.
+constexpr double kX0 = kLeft, kX1 = kWidth - kRight, kY0 = kHeight - kBottom, kY1 = kTop;
 
-std::string render_svg(const ProfileReport& r) {
+// The document as it is written.
+struct Svg {
+  std::string s;
+
+  template <class... Args>
+  void put(const char* fmt, Args... args) {
+    char buf[1024];
+    std::snprintf(buf, sizeof buf, fmt, args...);
+    s += buf;
+  }
+  void line(double xa, double ya, double xb, double yb) {
+    put("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>\n", xa, ya, xb, yb);
+  }
+  void text(double x, double y, const char* anchor, const std::string& what) {
+    put("<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"%s\">%s</text>\n", x, y, anchor, what.c_str());
+  }
+};
+
+// Both curves fit, with a little room above and to the right.
+Frame frame_of(const ProfileReport& r) {
   Frame f{0, 0};
   for (const Curve* c : {&r.ideal_curve, &r.engine_curve})
     for (auto [t, v] : *c) f.tmax = std::max(f.tmax, t), f.vmax = std::max(f.vmax, v);
   f.tmax = f.tmax > 0 ? f.tmax * 1.02 : 1.0;
   f.vmax = f.vmax > 0 ? f.vmax * 1.08 : 1.0;
-  const double x0 = kLeft, x1 = kWidth - kRight, y0 = kHeight - kBottom, y1 = kTop;
+  return f;
+}
 
-  std::string s;
-  char buf[1024];
-  auto put = [&](const char* fmt, auto... args) {
-    std::snprintf(buf, sizeof buf, fmt, args...);
-    s += buf;
-  };
-  put("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
-      "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
-      kWidth, kHeight, kWidth, kHeight);
+// The XML header, the title (the inputs), the background and the heading.
+void put_heading(Svg& svg, const ProfileReport& r) {
+  svg.put("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+          "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
+          "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
+          kWidth, kHeight, kWidth, kHeight);
   std::string total = r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
-  put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(), static_cast<long long>(r.input.aq3),
-      static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6),
-      static_cast<long long>(r.input.aq7));
-  put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth, kHeight);
-  put("<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
-      "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
-      kLeft, total.c_str(), static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
-      static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7),
-      r.triangular ? " (triangular)" : "");
+  svg.put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(), static_cast<long long>(r.input.aq3),
+          static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5),
+          static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7));
+  svg.put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth, kHeight);
+  svg.put("<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
+          "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
+          kLeft, total.c_str(), static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
+          static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6),
+          static_cast<long long>(r.input.aq7), r.triangular ? " (triangular)" : "");
+}
 
-  // Grid, tick marks and tick labels.
-  auto line = [&](double xa, double ya, double xb, double yb) {
-    put("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"/>\n", xa, ya, xb, yb);
-  };
-  auto text = [&](double x, double y, const char* anchor, const std::string& what) {
-    put("<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"%s\">%s</text>\n", x, y, anchor, what.c_str());
-  };
+// Grid, axes, tick marks, tick labels and the axis titles.
+void put_axes(Svg& svg, const Frame& f) {
   const double tstep = nice_step(f.tmax, 8), vstep = nice_step(f.vmax, 6);
   auto each_tick = [](double step, double max, auto fn) {
     for (int i = 0; i * step <= max * (1 + 1e-9); ++i) fn(i * step);
   };
-  s += "<g id=\"grid\" stroke=\"#dddddd\" stroke-width=\"1\">\n";
-  each_tick(tstep, f.tmax, [&](double t) { line(f.x(t), y0, f.x(t), y1); });
-  each_tick(vstep, f.vmax, [&](double v) { line(x0, f.y(v), x1, f.y(v)); });
-  s += "</g>\n<g id=\"axes\" stroke=\"black\" stroke-width=\"1\">\n";
-  line(x0, y0, x1, y0);
-  line(x0, y0, x0, y1);
-  each_tick(tstep, f.tmax, [&](double t) { line(f.x(t), y0, f.x(t), y0 + 5); });
-  each_tick(vstep, f.vmax, [&](double v) { line(x0 - 5, f.y(v), x0, f.y(v)); });
-  s += "</g>\n<g id=\"tick-labels\" fill=\"black\">\n";
-  each_tick(tstep, f.tmax, [&](double t) { text(f.x(t), y0 + 19, "middle", number(t)); });
-  each_tick(vstep, f.vmax, [&](double v) { text(x0 - 8, f.y(v) + 4, "end", number(v)); });
-  s += "</g>\n";
-  text((x0 + x1) / 2, kHeight - 14, "middle", "time (ms)");
-  put("<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity (pulses/s)</text>\n",
-      (y0 + y1) / 2);
+  svg.s += "<g id=\"grid\" stroke=\"#dddddd\" stroke-width=\"1\">\n";
+  each_tick(tstep, f.tmax, [&](double t) { svg.line(f.x(t), kY0, f.x(t), kY1); });
+  each_tick(vstep, f.vmax, [&](double v) { svg.line(kX0, f.y(v), kX1, f.y(v)); });
+  svg.s += "</g>\n<g id=\"axes\" stroke=\"black\" stroke-width=\"1\">\n";
+  svg.line(kX0, kY0, kX1, kY0);
+  svg.line(kX0, kY0, kX0, kY1);
+  each_tick(tstep, f.tmax, [&](double t) { svg.line(f.x(t), kY0, f.x(t), kY0 + 5); });
+  each_tick(vstep, f.vmax, [&](double v) { svg.line(kX0 - 5, f.y(v), kX0, f.y(v)); });
+  svg.s += "</g>\n<g id=\"tick-labels\" fill=\"black\">\n";
+  each_tick(tstep, f.tmax, [&](double t) { svg.text(f.x(t), kY0 + 19, "middle", number(t)); });
+  each_tick(vstep, f.vmax, [&](double v) { svg.text(kX0 - 8, f.y(v) + 4, "end", number(v)); });
+  svg.s += "</g>\n";
+  svg.text((kX0 + kX1) / 2, kHeight - 14, "middle", "time (ms)");
+  svg.put("<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity (pulses/s)</text>\n",
+          (kY0 + kY1) / 2);
+}
 
-  // The two series, clipped to the plot area.
-  put("<defs><clipPath id=\"plot-area\">"
-      "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
-      x0, y1 - 2, x1 - x0, y0 - y1 + 4);
+// The two series, clipped to the plot area.
+void put_curves(Svg& svg, const ProfileReport& r, const Frame& f) {
+  svg.put("<defs><clipPath id=\"plot-area\">"
+          "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
+          kX0, kY1 - 2, kX1 - kX0, kY0 - kY1 + 4);
   auto polyline = [&](const Curve& c, const char* id, const char* colour, const char* extra) {
-    s += std::string("<polyline id=\"") + id + "\" clip-path=\"url(#plot-area)\" fill=\"none\" stroke=\"" + colour +
-         "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"" + extra + " points=\"";
+    svg.s += std::string("<polyline id=\"") + id + "\" clip-path=\"url(#plot-area)\" fill=\"none\" stroke=\"" +
+             colour + "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"" + extra + " points=\"";
     bool first = true;
     for (auto [px, py] : screen_points(c, f)) {
-      put(first ? "%.2f,%.2f" : " %.2f,%.2f", px, py);
+      svg.put(first ? "%.2f,%.2f" : " %.2f,%.2f", px, py);
       first = false;
     }
-    s += "\"/>\n";
+    svg.s += "\"/>\n";
   };
   polyline(r.engine_curve, "engine", "#1f77b4", "");
   polyline(r.ideal_curve, "stpcalc", "#d62728", " stroke-dasharray=\"7 4\"");
+}
 
-  // Legend, above the plot area so it never covers a curve.
+// Legend, above the plot area so it never covers a curve.
+void put_legend(Svg& svg) {
   double lx = kLeft, ly = 50;
-  put("<g id=\"legend\">"
-      "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" stroke-dasharray=\"7 4\"/>"
-      "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
-      lx, ly, lx + 30, ly, lx + 36, ly + 4);
+  svg.put("<g id=\"legend\">"
+          "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" "
+          "stroke-dasharray=\"7 4\"/>"
+          "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
+          lx, ly, lx + 30, ly, lx + 36, ly + 4);
   lx += 400;
-  put("<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" stroke-width=\"2\"/>"
-      "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D ticks</text></g>\n",
-      lx, ly, lx + 30, ly, lx + 36, ly + 4);
-  s += "</svg>\n";
-  return s;
+  svg.put("<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" stroke-width=\"2\"/>"
+          "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D ticks</text></g>\n",
+          lx, ly, lx + 30, ly, lx + 36, ly + 4);
+}
+
+}  // namespace
+
+std::string render_svg(const ProfileReport& r) {
+  const Frame f = frame_of(r);
+  Svg svg;
+  put_heading(svg, r);
+  put_axes(svg, f);
+  put_curves(svg, r, f);
+  put_legend(svg);
+  svg.s += "</svg>\n";
+  return svg.s;
 }
 
 }  // namespace stepnode::tools

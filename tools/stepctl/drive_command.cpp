@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <stdexcept>
@@ -159,9 +160,12 @@ uint16_t run_steps(Axis& a, const Planner& plan, int wait_s) {
       if (std::find(step->leads_to.begin(), step->leads_to.end(), now) != step->leads_to.end()) break;
       if (drive::fault(now) && !drive::fault(state))  // a fault on the way: no use waiting
         throw std::runtime_error(a.who() + ": went to " + a.state_text(sw) + " on " + doing);
-      if (Clock::now() > deadline)
-        throw std::runtime_error(a.who() + ": stuck in " + a.state_text(sw) + ": " + doing + " did not lead to " +
-                                 targets + " within " + seconds_text(limit));
+      if (Clock::now() > deadline) {
+        std::string what = a.who();
+        what.append(": stuck in ").append(a.state_text(sw)).append(": ").append(doing);
+        what.append(" did not lead to ").append(targets).append(" within ").append(seconds_text(limit));
+        throw std::runtime_error(what);
+      }
       sleep_ms(10);
     }
   }
@@ -272,7 +276,7 @@ uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode, const std::function
       if (bar && bar->first != bar->second) {
         const double part = std::clamp(
             static_cast<double>(pos - bar->first) / static_cast<double>(bar->second - bar->first), 0.0, 1.0);
-        const int filled = static_cast<int>(part * 30 + 0.5);
+        const int filled = static_cast<int>(std::lround(part * 30));
         b = "[" + std::string(filled, '#') + std::string(30 - filled, '-') + "] " +
             std::to_string(static_cast<int>(part * 100)) + "% ";
       }
@@ -421,68 +425,6 @@ int cmd_home(Axis& a, const DriveArgs& args) {
 }
 
 }  // namespace
-
-CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
-  auto* drive = app.add_subcommand("drive", "CiA 402 drive (profiles = [\"cia402\"]): status, enable, disable, "
-                                            "quick-stop, fault-reset, pp, pv, home");
-  drive->require_subcommand(1);
-  const auto u32 = CLI::Range(int64_t{0}, int64_t{0xFFFF'FFFF});
-  auto add = [&](const char* name, const char* help) {
-    auto* sub = drive->add_subcommand(name, help);
-    sub->add_option("--node", args.node, "node id 1..127")->required()->check(CLI::Range(1, 127));
-    sub->add_option("--axis", args.axis, "axis 1..8 (objects at index + 0x800 * (axis - 1))")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 8));
-    sub->add_flag("--quiet", args.quiet, "no progress lines");
-    sub->callback([&args, name] { args.verb = name; });
-    return sub;
-  };
-  auto add_wait = [&](CLI::App* sub) {
-    sub->add_option("--wait", args.wait_s, "give up waiting for the motion after this many s")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 86400));
-  };
-  add("status", "state (6041h) in words, mode (6061h), statusword bits, 603Fh, 6064h, 606Ch");
-  add_wait(add("enable", "device control to Operation enabled (fault reset first)"));
-  add_wait(add("disable", "Disable operation, then Shutdown: to Ready to switch on"));
-  add("quick-stop", "Quick stop (6040h = 0x0B): to Quick stop active or Switch on disabled");
-  add_wait(add("fault-reset", "Fault reset (rising edge of 6040h bit 7): Fault to Switch on disabled"));
-
-  auto* pp = add("pp", "profile position: 6060h = 1, 607Ah = TARGET, set-point handshake, live progress to "
-                       "target reached");
-  pp->add_option("target", args.target, "target position (position units)")
-      ->required()
-      ->check(CLI::Range(int64_t{INT32_MIN}, int64_t{INT32_MAX}));
-  pp->add_flag("--relative", args.relative, "relative to the preceding target (controlword bit 6)");
-  pp->add_flag("--immediate", args.immediate, "change set immediately (controlword bit 5)");
-  pp->add_option("--velocity", args.velocity, "6081h profile velocity")->check(u32);
-  pp->add_option("--acceleration", args.acceleration, "6083h profile acceleration")->check(u32);
-  pp->add_option("--deceleration", args.deceleration, "6084h profile deceleration")->check(u32);
-  pp->add_flag("--no-wait", args.no_wait, "return once the set-point is acknowledged");
-  add_wait(pp);
-
-  auto* pv = add("pv", "profile velocity: 6060h = 3, 60FFh = VELOCITY, until velocity reached (speed zero for 0)");
-  pv->add_option("velocity", args.target, "target velocity (velocity units), signed")
-      ->required()
-      ->check(CLI::Range(int64_t{INT32_MIN}, int64_t{INT32_MAX}));
-  pv->add_option("--acceleration", args.acceleration, "6083h profile acceleration")->check(u32);
-  pv->add_option("--deceleration", args.deceleration, "6084h profile deceleration")->check(u32);
-  pv->add_flag("--no-wait", args.no_wait, "return once the target velocity is written");
-  add_wait(pv);
-
-  auto* home = add("home", "homing: 6060h = 6, homing operation start, until homing attained");
-  home->add_option("--method", args.method, "6098h homing method (CiA 402-2: 1..35, 37)")->check(CLI::Range(-128, 127));
-  home->add_option("--switch-speed", args.switch_speed, "6099h:1 speed during search for switch")
-      ->check(u32);
-  home->add_option("--zero-speed", args.zero_speed, "6099h:2 speed during search for zero")
-      ->check(u32);
-  home->add_option("--acceleration", args.acceleration, "609Ah homing acceleration")->check(u32);
-  home->add_option("--offset", args.home_offset, "607Ch home offset (the home position's position)")
-      ->check(CLI::Range(int64_t{INT32_MIN}, int64_t{INT32_MAX}));
-  home->add_flag("--no-wait", args.no_wait, "return once the homing has started");
-  add_wait(home);
-  return drive;
-}
 
 int run_drive_command(MasterBus& bus, const ObjectCatalog& catalog, const DriveArgs& args) {
   if (args.axis < 1 || args.axis > static_cast<int>(cia402::kMaxAxes))

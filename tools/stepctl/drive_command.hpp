@@ -31,7 +31,7 @@ struct DriveArgs {
   std::optional<int64_t> switch_speed, zero_speed, home_offset;
 };
 
-// Adds `drive` and its subcommands to `app`; the parsed words go to `args`.
+// Adds `drive` and its subcommands to `app`; the parsed words go to `args` (drive_options.cpp).
 CLI::App* add_drive_command(CLI::App& app, DriveArgs& args);
 
 // Returns the exit status (0, or 1 for a status with a fault). Throws std::runtime_error when

@@ -139,87 +139,154 @@ int cmd_dump(MasterBus& bus, const ObjectCatalog& cat, int node) {
   return failures ? 1 : 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"stepctl: CANopen master for stepnode nodes (NMT, SDO, bus watch)"};
-  app.require_subcommand(1);
-  std::string iface = "vcan0", eds, type_name, output;
+// ---- the command line -------------------------------------------------------------------
+// Every option's value, whichever subcommand sets it.
+struct Options {
+  std::string iface = "vcan0", eds, type_name, output, sdo_cob_ids;
   int timeout_ms = 1000;
   bool block = false, passive = false;
   int seconds = 0;
-  app.add_option("--iface", iface, "SocketCAN interface")->capture_default_str();
-  app.add_option("--eds", eds, "EDS file describing the node's objects (default: stepnode's own)");
-  app.add_option("--timeout", timeout_ms, "SDO / confirmation timeout in ms")->capture_default_str();
-  std::string sdo_cob_ids;
-  app.add_option("--sdo-cob-ids", sdo_cob_ids,
-                 "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
-                 "0x1201..0x1203 sub 1 and 2 (e.g. 0x695,0x6D5); default: 0x600+id,0x580+id (0x1200)");
-
-  std::string nmt_what;
+  std::string nmt_what, object, value;
   int node = -1;
-  auto* nmt = app.add_subcommand("nmt", "NMT command: start|stop|preop|reset-node|reset-comm");
-  nmt->add_option("command", nmt_what)->required()->check(
-      CLI::IsMember({"start", "stop", "preop", "reset-node", "reset-comm"}));
-  nmt->add_option("--node", node, "node id 1..127, or 0 for all nodes")->required()->check(CLI::Range(0, 127));
-
-  std::string object, value;
-  auto* read = app.add_subcommand("read", "read an object over SDO: read NODE INDEX[:SUB]");
-  read->add_option("node", node)->required()->check(CLI::Range(1, 127));
-  read->add_option("object", object, "e.g. 0x1017 or 0x1018:1")->required();
-  read->add_flag("--block", block, "use SDO block transfer");
-  read->add_option("--output", output, "write the raw bytes to a file (DOMAIN, EDS in 0x1021)");
-
-  auto* write = app.add_subcommand("write", "write an object over SDO: write NODE INDEX[:SUB] VALUE");
-  write->add_option("node", node)->required()->check(CLI::Range(1, 127));
-  write->add_option("object", object)->required();
-  write->add_option("value", value, "number (decimal or 0x..), text, or @FILE")->required();
-  write->add_option("--type", type_name, "CiA 301 type when the object is not in the EDS");
-  write->add_flag("--block", block, "use SDO block transfer");
-
-  auto* dump = app.add_subcommand("dump", "read every object of a node: dump NODE");
-  dump->add_option("node", node)->required()->check(CLI::Range(1, 127));
-
-  auto* watch = app.add_subcommand("watch", "decode the bus traffic of every node");
-  watch->add_flag("--passive", passive, "never send (do not read PDO mappings over SDO)");
-  watch->add_option("--seconds", seconds, "stop after this many seconds (0 = until Ctrl-C)");
-
-  // Axis commands: stepctl clear|home up|move abs 1000|jog up|stop|estop|status --node N --axis A
+  // Axis commands.
   std::vector<std::string> axis_words;
   int axis = 1;
   double jog_seconds = 1.0;
   bool quiet = false;
+  // HP 44714A words.
+  std::string hp_words;
+  int hp_channel = 0, hp_wait_s = 120;
+  DriveArgs drive_args;
+};
+
+// The subcommands that are not axis verbs (those are looked up by name: kAxisVerbs).
+struct Subcommands {
+  CLI::App* nmt = nullptr;
+  CLI::App* read = nullptr;
+  CLI::App* write = nullptr;
+  CLI::App* dump = nullptr;
+  CLI::App* watch = nullptr;
+  CLI::App* hp = nullptr;
+  CLI::App* drive = nullptr;
+};
+
+constexpr const char* kAxisVerbs[] = {"clear", "home", "move", "jog", "stop", "estop", "status"};
+
+void add_bus_options(CLI::App& app, Options& o) {
+  app.add_option("--iface", o.iface, "SocketCAN interface")->capture_default_str();
+  app.add_option("--eds", o.eds, "EDS file describing the node's objects (default: stepnode's own)");
+  app.add_option("--timeout", o.timeout_ms, "SDO / confirmation timeout in ms")->capture_default_str();
+  app.add_option("--sdo-cob-ids", o.sdo_cob_ids,
+                 "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
+                 "0x1201..0x1203 sub 1 and 2 (e.g. 0x695,0x6D5); default: 0x600+id,0x580+id (0x1200)");
+}
+
+// nmt, read, write, dump, watch.
+void add_object_commands(CLI::App& app, Options& o, Subcommands& s) {
+  s.nmt = app.add_subcommand("nmt", "NMT command: start|stop|preop|reset-node|reset-comm");
+  s.nmt->add_option("command", o.nmt_what)->required()->check(
+      CLI::IsMember({"start", "stop", "preop", "reset-node", "reset-comm"}));
+  s.nmt->add_option("--node", o.node, "node id 1..127, or 0 for all nodes")->required()->check(CLI::Range(0, 127));
+
+  s.read = app.add_subcommand("read", "read an object over SDO: read NODE INDEX[:SUB]");
+  s.read->add_option("node", o.node)->required()->check(CLI::Range(1, 127));
+  s.read->add_option("object", o.object, "e.g. 0x1017 or 0x1018:1")->required();
+  s.read->add_flag("--block", o.block, "use SDO block transfer");
+  s.read->add_option("--output", o.output, "write the raw bytes to a file (DOMAIN, EDS in 0x1021)");
+
+  s.write = app.add_subcommand("write", "write an object over SDO: write NODE INDEX[:SUB] VALUE");
+  s.write->add_option("node", o.node)->required()->check(CLI::Range(1, 127));
+  s.write->add_option("object", o.object)->required();
+  s.write->add_option("value", o.value, "number (decimal or 0x..), text, or @FILE")->required();
+  s.write->add_option("--type", o.type_name, "CiA 301 type when the object is not in the EDS");
+  s.write->add_flag("--block", o.block, "use SDO block transfer");
+
+  s.dump = app.add_subcommand("dump", "read every object of a node: dump NODE");
+  s.dump->add_option("node", o.node)->required()->check(CLI::Range(1, 127));
+
+  s.watch = app.add_subcommand("watch", "decode the bus traffic of every node");
+  s.watch->add_flag("--passive", o.passive, "never send (do not read PDO mappings over SDO)");
+  s.watch->add_option("--seconds", o.seconds, "stop after this many seconds (0 = until Ctrl-C)");
+}
+
+// Axis commands: stepctl clear|home up|move abs 1000|jog up|stop|estop|status --node N --axis A
+void add_axis_commands(CLI::App& app, Options& o) {
   auto add_axis_command = [&](const char* name, const char* help) {
     auto* sub = app.add_subcommand(name, help);
-    sub->add_option("args", axis_words, "e.g. up|down, abs|rel POSITION");
-    sub->add_option("--node", node, "node id 1..127")->required()->check(CLI::Range(1, 127));
-    sub->add_option("--axis", axis, "axis 1..8")->capture_default_str()->check(CLI::Range(1, 8));
-    sub->add_flag("--quiet", quiet, "no live progress line");
+    sub->add_option("args", o.axis_words, "e.g. up|down, abs|rel POSITION");
+    sub->add_option("--node", o.node, "node id 1..127")->required()->check(CLI::Range(1, 127));
+    sub->add_option("--axis", o.axis, "axis 1..8")->capture_default_str()->check(CLI::Range(1, 8));
+    sub->add_flag("--quiet", o.quiet, "no live progress line");
     return sub;
   };
   add_axis_command("clear", "axis: Clear Errors (%Q14)");
   add_axis_command("home", "axis: Find Home up|down (%Q4/%Q5), with live progress");
   add_axis_command("move", "axis: move abs|rel POSITION (%Q9/%Q8), with live progress");
   add_axis_command("jog", "axis: jog up|down for --seconds (level-sensitive %Q6/%Q7)")
-      ->add_option("--seconds", jog_seconds, "how long the jog bit stays on")->capture_default_str();
+      ->add_option("--seconds", o.jog_seconds, "how long the jog bit stays on")->capture_default_str();
   add_axis_command("stop", "axis: Decelerate and Stop (%Q15)");
   add_axis_command("estop", "axis: Immediate Stop (%Q16)");
   add_axis_command("status", "axis: status bits in words, motor and encoder position");
+}
 
-  // HP 44714A words: stepctl hp "PROFILE FREQ 100 800 200 25E-6; MOVE 20" --node 5 --axis 0
-  std::string hp_words;
-  int hp_channel = 0, hp_wait_s = 120;
+// HP 44714A words: stepctl hp "PROFILE FREQ 100 800 200 25E-6; MOVE 20" --node 5 --axis 0
+CLI::App* add_hp_command(CLI::App& app, Options& o) {
   auto* hp = app.add_subcommand("hp", "HP 44714A commands in the manual's words, ';' between commands; "
                                       "queries (POS?, DONE?, QPOS?, ERR?) print the answer");
-  hp->add_option("words", hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"")->required();
-  hp->add_option("--node", node, "node id 1..127")->required()->check(CLI::Range(1, 127));
-  hp->add_option("--axis", hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
-  hp->add_option("--wait", hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
+  hp->add_option("words", o.hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"")->required();
+  hp->add_option("--node", o.node, "node id 1..127")->required()->check(CLI::Range(1, 127));
+  hp->add_option("--axis", o.hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
+  hp->add_option("--wait", o.hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
+  return hp;
+}
 
+// A refusal of the node or of the drive is a runtime failure (exit 1); bad words were
+// refused before the bus (exit 2).
+template <class F>
+int as_failure(F run) {
+  try {
+    return run();
+  } catch (const std::runtime_error& e) {
+    throw Failure(e.what());
+  }
+}
+
+// The subcommand given, on the bus. Throws Failure (exit 1) or another exception (exit 2).
+int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
+  ObjectCatalog catalog(o.eds);
+  if (*s.watch) return run_watch(o.iface, catalog, o.passive, o.seconds);
+  if (*s.hp) plan_hp_words(o.hp_words, static_cast<unsigned>(o.hp_channel));  // bad words: exit 2 before the bus
+  std::optional<SdoCobIds> channel;
+  if (!o.sdo_cob_ids.empty()) channel = parse_sdo_cob_ids(o.sdo_cob_ids);  // bad: exit 2 before the bus
+  MasterBus bus(o.iface);
+  bus.set_sdo_timeout_ms(o.timeout_ms);
+  if (channel) bus.set_sdo_cob_ids(*channel);
+  if (*s.nmt) return cmd_nmt(bus, o.nmt_what, o.node, o.timeout_ms);
+  if (*s.read) return cmd_read(bus, catalog, o.node, o.object, o.block, o.output);
+  if (*s.write) return cmd_write(bus, catalog, o.node, o.object, o.value, o.type_name, o.block);
+  if (*s.dump) return cmd_dump(bus, catalog, o.node);
+  if (*s.hp) return run_hp_command(bus, o.node, static_cast<unsigned>(o.hp_channel), o.hp_words, o.hp_wait_s);
+  if (*s.drive) return as_failure([&] { return run_drive_command(bus, catalog, o.drive_args); });
+  for (const char* verb : kAxisVerbs) {
+    if (!*app.get_subcommand(verb)) continue;
+    std::vector<std::string> words{verb};
+    words.insert(words.end(), o.axis_words.begin(), o.axis_words.end());
+    return as_failure([&] { return run_axis_command(bus, o.node, o.axis, words, o.jog_seconds, o.quiet); });
+  }
+  return 0;
+}
+
+int stepctl(int argc, char** argv) {
+  CLI::App app{"stepctl: CANopen master for stepnode nodes (NMT, SDO, bus watch)"};
+  app.require_subcommand(1);
+  Options options;
+  Subcommands subcommands;
+  add_bus_options(app, options);
+  add_object_commands(app, options, subcommands);
+  add_axis_commands(app, options);
+  subcommands.hp = add_hp_command(app, options);
   // CiA 402: stepctl drive status|enable|disable|quick-stop|fault-reset|pp|pv|home --node N --axis A
-  DriveArgs drive_args;
-  auto* drive = add_drive_command(app, drive_args);
-
+  subcommands.drive = add_drive_command(app, options.drive_args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -228,36 +295,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    ObjectCatalog catalog(eds);
-    if (*watch) return run_watch(iface, catalog, passive, seconds);
-    if (*hp) plan_hp_words(hp_words, static_cast<unsigned>(hp_channel));  // bad words: exit 2 before the bus
-    std::optional<SdoCobIds> channel;
-    if (!sdo_cob_ids.empty()) channel = parse_sdo_cob_ids(sdo_cob_ids);  // bad: exit 2 before the bus
-    MasterBus bus(iface);
-    bus.set_sdo_timeout_ms(timeout_ms);
-    if (channel) bus.set_sdo_cob_ids(*channel);
-    if (*nmt) return cmd_nmt(bus, nmt_what, node, timeout_ms);
-    if (*read) return cmd_read(bus, catalog, node, object, block, output);
-    if (*write) return cmd_write(bus, catalog, node, object, value, type_name, block);
-    if (*dump) return cmd_dump(bus, catalog, node);
-    if (*hp) return run_hp_command(bus, node, static_cast<unsigned>(hp_channel), hp_words, hp_wait_s);
-    if (*drive) {
-      try {
-        return run_drive_command(bus, catalog, drive_args);
-      } catch (const std::runtime_error& e) {  // the node refused or the drive did not follow
-        throw Failure(e.what());
-      }
-    }
-    for (const char* verb : {"clear", "home", "move", "jog", "stop", "estop", "status"}) {
-      if (!*app.get_subcommand(verb)) continue;
-      std::vector<std::string> words{verb};
-      words.insert(words.end(), axis_words.begin(), axis_words.end());
-      try {
-        return run_axis_command(bus, node, axis, words, jog_seconds, quiet);
-      } catch (const std::runtime_error& e) {  // the node refused (bad words are exit 2)
-        throw Failure(e.what());
-      }
-    }
+    return run_subcommand(app, options, subcommands);
   } catch (const Failure& e) {
     std::fprintf(stderr, "stepctl: %s\n", e.what());
     return 1;
@@ -268,5 +306,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "stepctl: %s\n", e.what());
     return 2;
   }
-  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return stepctl(argc, argv);
+  } catch (const std::exception& e) {  // the command line itself could not be built
+    std::fprintf(stderr, "stepctl: %s\n", e.what());
+    return 1;
+  }
 }

@@ -200,8 +200,8 @@ void add_objects(od::Dictionary& od, unsigned axes) {
 void set_default_pdos(od::Dictionary& od, unsigned a, unsigned first_rpdo, unsigned first_tpdo) {
   using namespace obj;
   auto word = [a](uint16_t base, uint8_t bits) { return od::mapping_word(index(a, base), 0, bits); };
-  auto rmap = [first_rpdo](unsigned k) { return static_cast<uint16_t>(0x1600 + first_rpdo + k); };
-  auto tmap = [first_tpdo](unsigned k) { return static_cast<uint16_t>(0x1A00 + first_tpdo + k); };
+  auto rmap = [first_rpdo](unsigned k) { return od::rpdo_mapping(first_rpdo + k); };
+  auto tmap = [first_tpdo](unsigned k) { return od::tpdo_mapping(first_tpdo + k); };
   od::set_default_mapping(od, rmap(0), {word(kControlword, 16), word(kModesOfOperation, 8)});
   od::set_default_mapping(od, rmap(1), {word(kTargetPosition, 32), word(kTargetVelocity, 32)});
   od::set_default_mapping(od, tmap(0), {word(kStatusword, 16), word(kModesOfOperationDisplay, 8)});
@@ -209,7 +209,7 @@ void set_default_pdos(od::Dictionary& od, unsigned a, unsigned first_rpdo, unsig
   // Event-driven (transmission type 254, the communication objects' default) like the Horner
   // PDOs: the status on every change, the positions at most every 10 ms while they change
   // (inhibit time, 100 us units).
-  Entry& inhibit = od.at(static_cast<uint16_t>(0x1800 + first_tpdo + 1), 3);
+  Entry& inhibit = od.at(od::tpdo_parameter(first_tpdo + 1), 3);
   inhibit.default_value = inhibit.value = u16(100);
 }
 

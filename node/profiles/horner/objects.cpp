@@ -95,8 +95,8 @@ void add_registers(od::Dictionary& od, unsigned a) {
 void add_default_pdos(od::Dictionary& od, unsigned a) {
   using namespace obj;
   unsigned first = 4 * a;
-  auto rmap = [&](unsigned k) { return static_cast<uint16_t>(0x1600 + first + k); };
-  auto tmap = [&](unsigned k) { return static_cast<uint16_t>(0x1A00 + first + k); };
+  auto rmap = [&](unsigned k) { return od::rpdo_mapping(first + k); };
+  auto tmap = [&](unsigned k) { return od::tpdo_mapping(first + k); };
   od::set_default_mapping(od, rmap(0), {od::mapping_word(index(a, kCommandBits), 0, 16), od::mapping_word(index(a, kDestination), 0, 32)});
   uint16_t p = index(a, kProfile);
   od::set_default_mapping(od, rmap(1), {od::mapping_word(p, 1, 16), od::mapping_word(p, 2, 16), od::mapping_word(p, 3, 16), od::mapping_word(p, 4, 16)});

@@ -100,7 +100,7 @@ void add_channel(od::Dictionary& od, unsigned a) {
 
 // TPDO 4n+4: DONE?, the error number and the interrupt event word (24 bits), on change.
 void map_tpdo(od::Dictionary& od, unsigned a) {
-  od::set_default_mapping(od, static_cast<uint16_t>(0x1A00 + 4 * a + 3),
+  od::set_default_mapping(od, od::tpdo_mapping(4 * a + 3),
                           {od::mapping_word(obj::index(a, obj::kDone), 0, 8),
                            od::mapping_word(obj::index(a, obj::kError), 0, 8),
                            od::mapping_word(obj::index(a, obj::kInterrupt), intr_sub::kEvents, 8)});
