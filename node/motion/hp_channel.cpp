@@ -37,7 +37,7 @@ void Channel::pulse_sent(const Step& s) {
 
 void Channel::input_changed(unsigned motor, const InputEdge& edge) {
   if (motor != core_.selected()) return;
-  if (edge.input == Input::Halt) return set_halt_input(edge.active, edge.time);
+  if (edge.input == Input::Halt) return halt_input_changed(edge.time);
   // QINDEX ONCE: counting begins on the leading edge of the first index pulse (3-21).
   if (edge.input == Input::Marker && edge.active && q_waiting_for_index_) {
     q_offset_ = core_.motor().encoder_count();
@@ -79,7 +79,6 @@ void Channel::power_up(Tick now) {
   awaiting_first_step_ = false;
   q_offset_ = core_.motor().encoder_count();
   q_waiting_for_index_ = q_frozen_ = false;
-  halt_level_high_ = core_.inputs().halt_high();
 }
 
 Error Channel::accept(Error e) {
@@ -376,8 +375,9 @@ void Channel::enable_intr() {
 
 bool Channel::halt_active() const {
   switch (halt_mode_) {
-    case HaltMode::Lo: return !halt_level_high_;
-    case HaltMode::Hi: return halt_level_high_;
+    // The level as the core applied the HALT input's edges (HIGH: open, pulled up).
+    case HaltMode::Lo: return !core_.inputs().halt_high();
+    case HaltMode::Hi: return core_.inputs().halt_high();
     case HaltMode::Off: return false;
   }
   return false;
@@ -391,8 +391,7 @@ bool Channel::limit_active(int direction) const {
   return (!core_.inputs().lower_limit()) == nlim_high_;
 }
 
-void Channel::set_halt_input(bool level_high, Tick now) {
-  halt_level_high_ = level_high;
+void Channel::halt_input_changed(Tick now) {
   if (halt_active() && (run_ != Run::Idle || start_at_)) {
     core_.halt(*this, now);
     end(Done::Halted, intr::kHaltSwitch, now);

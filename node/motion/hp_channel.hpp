@@ -120,7 +120,7 @@ class Channel final : public FrontEnd, public AxisListener {
   bool limit_active(int direction) const;
   bool halt_active() const;
   // The HALT input changed (its edge, input_changed): a halt when it now reads active.
-  void set_halt_input(bool level_high, Tick now);
+  void halt_input_changed(Tick now);
   // FrontEnd: the channel's own jobs.
   Hooks hooks() const override { return {.pulse = true}; }
   OutputPulse pulse(const Step& step) const override;
@@ -151,7 +151,6 @@ class Channel final : public FrontEnd, public AxisListener {
   double qscale_ = 1.0;
   QIndexMode qindex_ = QIndexMode::Off;
   // Inputs.
-  bool halt_level_high_ = true;  // HALTn pulled up: the switch is open
   bool test_jumper_ = false;
   // State.
   Pending pending_;
