@@ -25,6 +25,9 @@ struct CommandWords {
   uint32_t index_window_close = 0;   // %AQ13/14
 };
 
+// Whether `bit` is on in a command or status word.
+constexpr bool is_set(uint16_t bits, uint16_t bit) { return (bits & bit) != 0; }
+
 constexpr int32_t kPositionMin = -8'388'608;
 constexpr int32_t kPositionMax = 8'388'607;
 
