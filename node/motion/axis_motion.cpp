@@ -66,6 +66,10 @@ void Axis::after_step(const Step& step) {
       index_taken_ = true;
       RampSpec alternate = move_ramp_;
       alternate.decel_ticks_per_level = index_ramp_.decel_ticks_per_level;
+      // The new end point is N steps past the index (STP100 5.3.5: "defined to be N more
+      // steps"); an N shorter than the deceleration ramp still ends there, decelerating to
+      // the base velocity in the time that fits (README: "The Horner module's rules").
+      fit_deceleration(alternate, g.level(), index_destination_);
       core_.retarget(t, index_destination_, alternate);
       move_target_steps_ = move_done_steps_ + index_destination_;
     }

@@ -93,6 +93,16 @@ RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t le
   return r;
 }
 
+bool fit_deceleration(RampSpec& ramp, int64_t level, int64_t steps) {
+  const __int128 room = static_cast<__int128>(steps - 1) * ramp.phase_per_step;
+  if (ramp.decel_phase(level) <= room) return true;
+  const __int128 per_tick = level_sum(ramp.base_level, level);  // the phase of Z = 1
+  const __int128 z = per_tick > 0 && room > 0 ? room / per_tick : 0;
+  if (z < 1) return false;
+  ramp.decel_ticks_per_level = Rational{static_cast<int64_t>(z), 1};
+  return true;
+}
+
 int64_t horner_max_ramp_ms(int64_t aq4, int64_t aq5) {
   int64_t max_useful = (aq5 - aq4) * 10 / 3;  // (AQ5-AQ4)/0.3
   return max_useful < 27300 ? max_useful : 27300;

@@ -50,6 +50,13 @@ struct RampSpec {
   int64_t min_creep_level = 1;
 };
 
+// Shortens `ramp`'s deceleration, in whole ticks per level as the module's Z, so that the
+// ramp from `level` down to the base level fits in `steps` steps (one step kept for the phase
+// accumulator's remainder): for an end point moved closer than the deceleration ramp (an
+// indexed move's index). Unchanged if it already fits; false if not even one tick per level
+// fits (fewer than two steps left), the ramp unchanged.
+bool fit_deceleration(RampSpec& ramp, int64_t level, int64_t steps);
+
 // The Horner module's ramp from %AQ3..%AQ7 (SPM30 3.4, STPCALC B1.3.1):
 // D = 8192*AQ3, Z_A = ceil(AQ6*24576 / ((AQ5-AQ4)*5)), Z_D the same with AQ7 (0 = AQ6).
 // Throws std::invalid_argument naming the register and its legal range.

@@ -118,6 +118,42 @@ TEST_F(AxisIndexed, Stp100_5_3_5_IndexInsideTheWindowEndsIndexDestinationPastIt)
   EXPECT_NEAR(static_cast<double>(3700 - decel_from + 1), calc.deceleration_pulses, 1.5);
 }
 
+// STP100 5.3.5: the new end point "is defined to be N more steps (in the same direction)
+// beyond the point at which the Index Input became active". An N shorter than the %AQ10 ramp
+// (250 ms from 1000 to 100 steps/s: about 137 pulses) still ends there, and the motor still
+// slows to the base velocity before it stops (a stepper stops safely only from its base
+// velocity): the deceleration takes the time that fits. Before: the ramp was cut at 984 steps/s.
+TEST_F(AxisIndexed, Stp100_5_3_5_IndexDestinationCloserThanTheRampEndsThereAtTheBaseVelocity) {
+  for (uint32_t n : {40u, 100u, 136u}) {
+    build();
+    indexed(10000, n, 1000, 8000, /*index_decel=*/250);
+    std::vector<Tick> steps;
+    Tick index_time = -1;
+    int64_t last = mech();
+    Tick end = now + ms(20000);
+    while (now < end && any(status::kMoving)) {
+      auto next = axis->next_step_time();
+      at(next ? std::min(*next, end) : end);
+      if (mech() != last) {
+        last = mech();
+        if (mech() >= 3000) steps.push_back(now);
+        if (mech() == 3000) index_time = now;
+      }
+    }
+    EXPECT_EQ(mech(), 3000 + n) << n;  // exactly N past the index
+    EXPECT_EQ(errors(), 0) << n;
+    ASSERT_GT(index_time, 0);
+    ASSERT_GE(steps.size(), 3u);
+    // The last step comes at about the base velocity (100 steps/s: 10 ms; the step spans the
+    // ramp's last levels, so its mean rate is a little above base): under twice the base.
+    double last_interval_ms = ticks_to_ms(steps.back() - steps[steps.size() - 2]);
+    EXPECT_GT(last_interval_ms, 1000.0 / 200) << n;
+    // And the intervals only grow from the index on: a deceleration, no jump.
+    for (size_t i = 2; i < steps.size(); ++i)
+      EXPECT_GE(steps[i] - steps[i - 1] + 1, steps[i - 1] - steps[i - 2]) << n << " step " << i;
+  }
+}
+
 TEST_F(AxisIndexed, Stp100_4_2_3_8_ZeroIndexDecelerationMeansTheNormalOne) {
   axis->words().deceleration_ms = 300;
   indexed(10000, 900, 1000, 8000, 0);
