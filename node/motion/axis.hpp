@@ -142,6 +142,11 @@ class Axis final : public FrontEnd, public AxisListener {
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);
   std::optional<RampSpec> ramp_from_words(Tick now, bool index_decel = false);
   void start_move(int64_t distance, const RampSpec& ramp, Tick now, bool indexed, bool resume = false);
+  // Positions are those the status words carry (SPM30 3.3): whether a move of `distance`
+  // steps from here, and an indexed one's end after any index its window accepts, ends
+  // inside them; whether the index words are inside the module model's ranges.
+  bool ends_in_range(int64_t distance, bool indexed) const;
+  bool index_words_legal() const;
   bool start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now);
   void start_base_run(int direction, Tick now);
   void finish(Tick now);

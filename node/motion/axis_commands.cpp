@@ -1,6 +1,7 @@
 // The Horner front end's commands (SPM30 section 4, STP100 5.3, STP113 C1.3): the command
 // bits' edges and their filter (SPM30 3.2), and each command's rules; FIND HOME is in
 // node/motion/axis_homing.cpp, the steps' rules in node/motion/axis_motion.cpp.
+#include <algorithm>
 #include <bit>
 #include <cstdlib>
 #include <stdexcept>
@@ -51,6 +52,10 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     move_done_steps_ = 0;
   }
   index_was_active_ = inputs().index();  // an index already on was received before the window
+  if (!resume && !ends_in_range(distance, indexed)) {
+    job_ = Job::None;
+    return latch(status::kIllegalMove, now);  // beyond the positions the module can hold
+  }
   if (distance == 0) {
     job_ = Job::None;
     notify(AxisEvent::MoveDone);
@@ -149,9 +154,37 @@ void Axis::jog(int direction, Tick now) {
   if (core_.estop_active()) return latch(status::kEmergencyStop, now);
   if (direction > 0 ? inputs().upper_limit() : inputs().lower_limit())
     return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  // The position words end at -8,388,608 and +8,388,607 (SPM30 3.3): a jog runs to the bound
+  // at most and decelerates to stop on it; at the bound there is no jog further.
+  int64_t to_bound = direction > 0 ? int64_t{kPositionMax} - core_.position()
+                                   : int64_t{core_.position()} - kPositionMin;
+  if (to_bound <= 0) return latch(status::kIllegalMove, now);
   job_ = Job::Jog;
   move_ramp_ = *ramp;
-  start_motion(*ramp, direction, std::nullopt, now);
+  start_motion(*ramp, direction, to_bound, now);
+}
+
+bool Axis::ends_in_range(int64_t distance, bool indexed) const {
+  const int64_t from = core_.position(), length = std::llabs(distance);
+  int64_t furthest = length;
+  if (indexed) {
+    // An index counts while the window is open: from %AQ11 up to %AQ13 and the deceleration
+    // point (before the end); the move then ends %AQ8 past the step it came at.
+    int64_t last_index_step = std::min<int64_t>(index_window_close_, length) - 1;
+    if (last_index_step >= int64_t{index_window_open_})
+      furthest = std::max(furthest, last_index_step + int64_t{index_destination_});
+  }
+  const int64_t end = distance >= 0 ? from + furthest : from - furthest;
+  return end >= kPositionMin && end <= kPositionMax;
+}
+
+bool Axis::index_words_legal() const {
+  // SPM30 C1.3.4 (STP113): 0..+8,388,607; STP100 table 4.1: 1..16,777,215.
+  const bool stp100 = config_.module == AxisConfig::Module::Stp100;
+  const uint32_t low = stp100 ? 1 : 0, high = stp100 ? 16'777'215 : kPositionMax;
+  for (uint32_t word : {words_.index_destination, words_.index_window_open, words_.index_window_close})
+    if (word < low || word > high) return false;
+  return true;
 }
 
 void Axis::move(uint16_t bit, Tick now) {
@@ -162,6 +195,7 @@ void Axis::move(uint16_t bit, Tick now) {
   auto ramp = ramp_from_words(now);
   if (!ramp) return;
   if (bit == command::kMoveIndexed) {
+    if (!index_words_legal()) return latch(status::kIllegalMove, now);
     // SPM30 3.4 / STP100 4.2.3: the words may be changed for the next command as soon as
     // this one started, so the index words (and the alternate deceleration, %AQ10) are
     // taken now, not when the index comes.

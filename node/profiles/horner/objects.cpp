@@ -42,6 +42,9 @@ void add_registers(od::Dictionary& od, unsigned a) {
   limits<uint16_t>(prof.add(profile_sub::kDeceleration, "Deceleration time ms", DT::Unsigned16,
                             AC::ReadWrite, encode<uint16_t>(0), true), 0, 27300);
 
+  // The union of the two modules' ranges (STP113 C1.3.4: 0..8,388,607; STP100 table 4.1:
+  // 1..16,777,215); the axis checks the module model's own range at MOVE INDEXED (Illegal
+  // Move outside it). The window closes by default at the STP113's largest value.
   Object& idx = od.record(index(a, kIndexedMove), axis_name(a, "indexed move"));
   limits<uint32_t>(idx.add(indexed_sub::kDestination, "Indexed destination", DT::Unsigned32,
                            AC::ReadWrite, encode<uint32_t>(0), true), 0, 16'777'215);
@@ -50,7 +53,7 @@ void add_registers(od::Dictionary& od, unsigned a) {
   limits<uint32_t>(idx.add(indexed_sub::kWindowOpen, "Index window open", DT::Unsigned32, AC::ReadWrite,
                            encode<uint32_t>(0), true), 0, 16'777'215);
   limits<uint32_t>(idx.add(indexed_sub::kWindowClose, "Index window close", DT::Unsigned32, AC::ReadWrite,
-                           encode<uint32_t>(16'777'215), true), 0, 16'777'215);
+                           encode<uint32_t>(8'388'607), true), 0, 16'777'215);
 
   // Positions and velocity are sampled values (Entry::pdo_sampled).
   od.var(index(a, kMotorPosition), axis_name(a, "motor position"), DT::Integer32, AC::ReadOnly,
