@@ -95,24 +95,23 @@ void Axis::latch(uint16_t error_bits, Tick now) {
   // decelerates: see master_lost).
   const bool was_moving = core_.moving();
   core_.abort(this, now);
-  latched(error_bits, was_moving);
+  latched(error_bits, was_moving, now);
 }
 
 void Axis::emergency_stop(Tick when, bool was_moving) {
-  (void)when;
-  latched(status::kEmergencyStop, was_moving);
+  latched(status::kEmergencyStop, was_moving, when);
 }
 
-void Axis::end_job() {
+void Axis::end_job(Tick when) {
   // STP100 5.3.5 NOTE: "at the end of an Indexed Move, DIR+ and DIR- are always taken Low
   // and High": DIR is its move-in-progress output, whatever ended the move.
-  if (job_ == Job::Move && move_indexed_) core_.set_dir_output(false);
+  if (job_ == Job::Move && move_indexed_) core_.set_dir_output(false, when);
   job_ = Job::None;
 }
 
-void Axis::latched(uint16_t error_bits, bool was_moving) {
+void Axis::latched(uint16_t error_bits, bool was_moving, Tick when) {
   if (was_moving) position_valid_ = false;  // SPM30 3.3.1: a sudden stop invalidates the position
-  end_job();
+  end_job(when);
   waiting_for_limit_release_ = false;
   resumable_ = false;
   errors_ |= error_bits;

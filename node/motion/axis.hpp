@@ -45,6 +45,9 @@ struct AxisConfig {
   // A move too short for the running velocity cruises at STPCALC's peak (B1.3.6) instead of
   // turning at halfway (SPM30 3.4.5): STPCALC's figures rather than the module's motion.
   bool stpcalc_peak_short_moves = false;
+  // Direction output setup time (SPM30 and STP100 specifications: 2 ms): the first step
+  // after DIR changed comes at least this long after it. 0 = none.
+  int64_t direction_setup_us = 2000;
 };
 
 // What the axis reports as it happens (status changes go out on the bus at once).
@@ -138,7 +141,7 @@ class Axis final : public FrontEnd, public AxisListener {
   void move(uint16_t command_bit, Tick now);
   void resume_move(Tick now);
   void latch(uint16_t error_bits, Tick now);
-  void latched(uint16_t error_bits, bool was_moving);
+  void latched(uint16_t error_bits, bool was_moving, Tick when);
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);
   std::optional<RampSpec> ramp_from_words(Tick now, bool index_decel = false);
   void start_move(int64_t distance, const RampSpec& ramp, Tick now, bool indexed, bool resume = false);
@@ -150,7 +153,7 @@ class Axis final : public FrontEnd, public AxisListener {
   bool start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now);
   void start_base_run(int direction, Tick now);
   void finish(Tick now);
-  void end_job();
+  void end_job(Tick when);
   bool moving() const { return core_.moving() || waiting_for_limit_release_; }
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();

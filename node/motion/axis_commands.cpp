@@ -27,7 +27,8 @@ std::optional<RampSpec> Axis::ramp_from_words(Tick now, bool index_decel) {
 bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now) {
   job_direction_ = direction;
   // DIR is set at the start of every move (STP100 5.3.5), by the core.
-  if (!core_.start(*this, ramp, direction, distance, now)) {
+  const Tick dir_setup = (config_.direction_setup_us * kClockHz + 999'999) / 1'000'000;  // at least
+  if (!core_.start(*this, ramp, direction, distance, now, dir_setup)) {
     job_ = Job::None;  // another front end's job: the command filter keeps this from happening
     return false;
   }
@@ -73,7 +74,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
       // STP100 5.3.4: the move starts when the limit input is released.
       waiting_for_limit_release_ = true;
       core_.claim(*this, now);
-      core_.set_dir_output(direction > 0);
+      core_.set_dir_output(direction > 0, now);
       return;
     }
     latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
@@ -121,7 +122,7 @@ void Axis::immediate_stop(Tick now) {
   if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
   core_.abort(this, now);
   waiting_for_limit_release_ = false;
-  end_job();
+  end_job(now);
 }
 
 void Axis::decelerate_and_stop(Tick now) {

@@ -110,7 +110,10 @@ class AxisCore {
   bool owned_by(const FrontEnd& f) const { return owner_ == &f; }
   // The owner's next motion: the first of a job (refused with false while another front
   // end's job runs) or the next of the same job (homing's back-off, a repeated move).
-  bool start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now);
+  // `dir_setup`: the first step falls at least that long after the DIR output last changed
+  // (the Horner modules' direction output setup time); the motion begins later if needed.
+  bool start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now,
+             Tick dir_setup = 0);
   // A job that waits before its first motion (FrontEnd::poll); `start` ends the wait.
   bool claim(FrontEnd& by, Tick now);
   bool waiting() const { return waiting_; }
@@ -167,7 +170,10 @@ class AxisCore {
   void set_position(int32_t p) { position_ = p; }
   // The DIR output's level: set at the start of every motion (STP100 5.3.5).
   bool dir_output_high() const { return dir_high_; }
-  void set_dir_output(bool high) { dir_high_ = high; }
+  void set_dir_output(bool high, Tick now) {
+    if (high != dir_high_) dir_changed_at_ = now;
+    dir_high_ = high;
+  }
   bool estop_active() const { return motors_[selected_].levels.emergency_stop(); }
 
   // The inputs of the motor stepped and sensed, as of the last edge the core applied (at
@@ -224,6 +230,7 @@ class AxisCore {
   unsigned input_watchers_ = 0;
   int32_t position_ = 0;
   bool dir_high_ = false;
+  Tick dir_changed_at_ = -(Tick{1} << 60);  // long before any motion: DIR has been stable
   unsigned selected_ = 0;
 };
 

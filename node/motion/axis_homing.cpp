@@ -31,7 +31,7 @@ void Axis::find_home(int direction, Tick now) {
       return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
     job_direction_ = direction;
     core_.claim(*this, now);
-    core_.set_dir_output(direction > 0);
+    core_.set_dir_output(direction > 0, now);
     return home_event(now, /*at_limit=*/true);
   }
   start_motion(*ramp, direction, std::nullopt, now);

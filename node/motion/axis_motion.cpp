@@ -25,8 +25,7 @@ void Axis::job_halted(const FrontEnd& owner, Tick when) {
 }
 
 void Axis::aborted(Tick when) {
-  (void)when;
-  end_job();  // the e-stop, or another front end's stop (emergency_stop latches %I1)
+  end_job(when);  // the e-stop, or another front end's stop (emergency_stop latches %I1)
   waiting_for_limit_release_ = false;
 }
 
@@ -78,7 +77,7 @@ void Axis::after_step(const Step& step) {
 
 void Axis::finish(Tick now) {
   Job job = job_;
-  end_job();
+  end_job(now);
   if (job == Job::None) return;  // the Home a Decelerate and Stop ended (its ramp just ran out)
   if (job == Job::Home) return notify(AxisEvent::StatusChanged);  // stopped before home
   if (job == Job::Move) {

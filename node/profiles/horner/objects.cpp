@@ -85,6 +85,9 @@ void add_registers(od::Dictionary& od, unsigned a) {
   limits<uint8_t>(decoding, 1, 4);
   cfg.add(config_sub::kStpcalcPeakShortMoves, "Short moves cruise at STPCALC's peak", DT::Boolean,
           AC::ReadWrite, {0});
+  // SPM30 / STP100 specifications: "Direction Output Setup Time 2 ms".
+  cfg.add(config_sub::kDirectionSetup, "Direction output setup time us", DT::Unsigned16, AC::ReadWrite,
+          encode<uint16_t>(2000));
   decoding.validate = [](std::span<const uint8_t> v) {
     return v[0] == 3 ? od::SdoAbort::InvalidValue : od::SdoAbort::None;
   };

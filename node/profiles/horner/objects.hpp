@@ -39,7 +39,7 @@ namespace config_sub {
 constexpr uint8_t kEncoderType = 1, kMultiplier = 2, kDivisor = 3, kTolerance = 4,
                   kStallDetection = 5, kHomeMethod = 6, kOriginSource = 7, kLimitQualified = 8,
                   kLimitStartedMoves = 9, kIndexedMoves = 10, kModuleModel = 11, kQuadratureDecoding = 12,
-                  kStpcalcPeakShortMoves = 13;
+                  kStpcalcPeakShortMoves = 13, kDirectionSetup = 14;
 }
 
 // The axis' PDOs: RPDO/TPDO numbers 4a+1..4a+4 (0x1400/0x1800 + 4a + k). The fourth TPDO

@@ -52,6 +52,7 @@ void HornerService::load_config(unsigned a) {
                                                     : motion::AxisConfig::Module::Spm30;
   cfg.quadrature_decoding = u8(horner::config_sub::kQuadratureDecoding);
   cfg.stpcalc_peak_short_moves = u8(horner::config_sub::kStpcalcPeakShortMoves) != 0;
+  cfg.direction_setup_us = dictionary_.get<uint16_t>(c, horner::config_sub::kDirectionSetup);
   axes_.axis(a).set_config(cfg);
   axes_.machine().axes[a].config().encoder = cfg.encoder;  // the encoder is on the axis' first motor
 }
