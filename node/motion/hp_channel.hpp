@@ -84,7 +84,9 @@ class Channel final : public FrontEnd, public AxisListener {
   double qscale() const { return qscale_; }
   bool plim_sense_high() const { return plim_high_; }
   bool nlim_sense_high() const { return nlim_high_; }
-  double current_width() const;  // WIDTH mode: the pulse width now (s)
+  // The width of the pulses at the outputs now (s; the last pulse's, to 1 us): the PROFILE
+  // FREQ pwidth, or the width a WIDTH-mode SUSTAIN has ramped to; 0 without a pulse train.
+  double current_width() const;
   // The last triggered action: trigger tick and first step tick.
   std::optional<Tick> trigger_time() const { return trigger_time_; }
   std::optional<Tick> first_step_time() const { return first_step_; }
@@ -115,10 +117,14 @@ class Channel final : public FrontEnd, public AxisListener {
   void change_sustain_velocity(double target, Tick at);
   bool below_rate_resolution(double rate) const;
   double current_width_at(Tick t) const;
+  uint32_t width_ns_at(Tick t) const;  // a pulse's width at the outputs at `t`, 1 us resolution
+  void replan_widths(Tick at);
   void end(Done how, uint8_t event, Tick at);
   void interrupt(uint8_t event, Tick at);
   bool limit_active(int direction) const;
   bool halt_active() const;
+  // A WIDTH-mode SUSTAIN triggered and not ended: general purpose pulse output (3-23).
+  bool pulse_train() const { return profile_.mode == ProfileMode::Width && (run_ != Run::Idle || start_at_); }
   // The HALT input changed (its edge, input_changed): a halt when it now reads active.
   void halt_input_changed(Tick now);
   // FrontEnd: the channel's own jobs.

@@ -45,6 +45,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_from_ = current_width_at(at);
       width_since_ = at;
       width_target_ = profile_.min;
+      replan_widths(at);
     } else {
       core_.stop(at);
     }
@@ -62,6 +63,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
       width_from_ = current_width_at(at);
       width_since_ = at;
       width_target_ = target;
+      replan_widths(at);
     } else {
       sustain_rate_ = target;
       change_sustain_velocity(target, at);

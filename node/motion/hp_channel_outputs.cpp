@@ -21,7 +21,17 @@ OutputPulse Channel::pulse(const Step& s) const {
   out.ndir_level = p.ndir_level;
   out.ndir_positive_level = pulse_.ndir_high;
   out.pstp_level = p.pstp_level;
+  // How long it lasts: the PROFILE's pwidth (FREQ) or the width ramped to by this step's
+  // time (WIDTH). Asked ahead of time too: a new SUSTAIN width re-plans the queued pulses.
+  out.width_ns = width_ns_at(s.time);
   return out;
+}
+
+uint32_t Channel::width_ns_at(Tick t) const {
+  if (run_ == Run::Idle) return 0;
+  const double seconds = profile_.mode == ProfileMode::Freq ? profile_.last : current_width_at(t);
+  // Appendix A: "Pulse Width ... Resolution 1 usec".
+  return static_cast<uint32_t>(std::llround(seconds * 1e6)) * 1000u;
 }
 
 void Channel::pulse_sent(const Step& s) {
@@ -37,7 +47,13 @@ double Channel::current_width_at(Tick t) const {
   return std::max(width_target_, width_from_ - change);
 }
 
-double Channel::current_width() const { return current_width_at(core_.generator().time()); }
+double Channel::current_width() const { return width_ns_at(core_.generator().time()) * 1e-9; }
+
+void Channel::replan_widths(Tick at) {
+  // The width is a function of time the queued pulses were given: from `at` it changes, so
+  // the pulses queued after `at` are planned again (the same steps on the same grid).
+  if (core_.owned_by(*this) && core_.moving()) core_.regrid(at, core_.generator().ramp());
+}
 
 void Channel::width_advance(Tick now) {
   if (profile_.mode != ProfileMode::Width || (run_ != Run::Sustain && run_ != Run::SustainStopping)) return;
