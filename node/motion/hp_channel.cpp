@@ -26,7 +26,7 @@ void Channel::power_up(Tick now) {
   qscale_ = 1.0;
   qindex_ = QIndexMode::Off;
   pending_ = Pending{};
-  armed_ = blocking_ = false;
+  armed_ = locked_ = blocking_ = false;
   start_at_.reset();
   run_ = Run::Idle;
   outcome_ = Done::Completed;
@@ -78,11 +78,12 @@ Error Channel::pscale(double units_per_step) {
 Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
   if (blocking_) return accept(Error::AccessoryBusy);
   bool moving = run_ != Run::Idle || start_at_ || core_.busy();
-  if (mode == StandbyMode::On && moving) return accept(Error::AccessoryBusy);  // power off under a move
+  // Power off under a move; but in pulse output STBY follows the pulse train (3-29).
+  if (mode == StandbyMode::On && moving && !pulse_train()) return accept(Error::AccessoryBusy);
   standby_ = mode;
   standby_high_ = sense_high;
   if (mode == StandbyMode::Off) powered_ = true;       // OFF = apply power
-  else if (mode == StandbyMode::On) powered_ = false;  // ON = remove power
+  else if (mode == StandbyMode::On) powered_ = pulse_train();  // ON = remove power
   else if (!moving && powered_) idle_since_ = now;     // AUTO: off a second after idle
   return accept(Error::None);
 }
@@ -104,6 +105,8 @@ void Channel::end(Done how, uint8_t event, Tick at) {
   blocking_ = false;
   awaiting_first_step_ = false;
   idle_since_ = at;
+  // STANDBY ON in pulse output: "After all pulses are sent, the STBYn output goes high" (3-29).
+  if (standby_ == StandbyMode::On) powered_ = false;
   interrupt(event, at);
 }
 

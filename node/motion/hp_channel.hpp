@@ -66,6 +66,8 @@ class Channel final : public FrontEnd, public AxisListener {
   Conflict last_conflict() const { return last_conflict_; }
   uint8_t interrupt_events() const { return events_; }
   bool intr_enabled() const { return intr_enabled_; }
+  // A MOVE or SUSTAIN without NOWAIT waits for a trigger it cannot get (3-13 note 1).
+  bool locked_in_wait() const { return armed_ && locked_; }
   const Profile& active_profile() const { return profile_; }
   double scale() const { return position_.scale(); }
   TrigMode trig_mode() const { return trig_; }
@@ -75,8 +77,9 @@ class Channel final : public FrontEnd, public AxisListener {
   bool motor_powered() const { return powered_; }
   // Whether pulses reach a powered motor: STANDBY AUTO applies power before any pulse
   // (whichever front end moves the axis), so only STANDBY ON leaves the motor without
-  // torque while it is pulsed.
-  bool pulses_reach_powered_motor() const { return standby_ != StandbyMode::On; }
+  // torque while it is pulsed, except for the channel's own WIDTH-mode pulse train, which
+  // the STBY output follows (3-29).
+  bool pulses_reach_powered_motor() const { return standby_ != StandbyMode::On || powered_; }
   bool stby_output_high() const { return !powered_ == standby_high_; }
   const PulseSetup& pulse_setup() const { return pulse_; }
   HaltMode halt_mode() const { return halt_mode_; }
@@ -161,6 +164,7 @@ class Channel final : public FrontEnd, public AxisListener {
   // State.
   Pending pending_;
   bool armed_ = false;               // a MOVE/SUSTAIN waits for its trigger
+  bool locked_ = false;              // ...given without NOWAIT: no trigger reaches it (3-13)
   std::optional<Tick> start_at_;     // triggered, starting after DELAY
   bool blocking_ = false;            // a command without NOWAIT has not finished
   Run run_ = Run::Idle;

@@ -164,6 +164,9 @@ void Channel::advance(Tick now) {
   width_advance(now);
   core_.advance_to(now);
   check_sustain_reached(now);
+  // STANDBY ON in pulse output follows this channel's pulse train (a triggered SUSTAIN that
+  // did not start, the axis busy, leaves it off again).
+  if (standby_ == StandbyMode::On) powered_ = pulse_train();
   // STANDBY AUTO follows the axis, whichever front end moves it.
   if (standby_ == StandbyMode::Auto) {
     if (core_.busy() || run_ != Run::Idle || start_at_) {

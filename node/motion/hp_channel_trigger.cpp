@@ -12,7 +12,9 @@ namespace stepnode::motion::hp {
 Error Channel::check_can_move(bool width_allowed) const {
   if (!width_allowed && profile_.mode == ProfileMode::Width) return Error::NotValidInWidthMode;
   if (test_jumper_) return Error::TestJumperSet;
-  if (standby_ == StandbyMode::On) return Error::CannotMoveWhileStandbyOn;
+  // Error 94: "Motor cannot move when powered down by STANDBY in the ON mode". A WIDTH-mode
+  // SUSTAIN is pulse output, not a motor: there STBY follows the pulse train (3-29).
+  if (standby_ == StandbyMode::On && profile_.mode == ProfileMode::Freq) return Error::CannotMoveWhileStandbyOn;
   return Error::None;
 }
 
@@ -53,8 +55,14 @@ bool Channel::below_rate_resolution(double rate) const {
 Error Channel::arm(const Pending& p, bool nowait, Tick now) {
   pending_ = p;
   armed_ = true;
-  // Without NOWAIT the channel takes no other command until this one is done (3-12).
+  // Without NOWAIT the channel takes no other command until this one is done (3-12). Under
+  // a trigger other than AUTO that locks it in its wait state: "The MOVE and SUSTAIN
+  // commands must specify the NOWAIT option for these trigger modes to work" (3-13 note 1);
+  // "the SUSTAIN command will be locked into a wait state" (3-27 NOTE). Neither the SYNC
+  // (SYS) nor channel 0 (CHAN0) starts it; only TRIG HOLD (the manual's DEVICE CLEAR
+  // followed by TRIG HOLD) cancels it.
   blocking_ = !nowait;
+  locked_ = !nowait && trig_ != TrigMode::Auto;
   accept(Error::None);
   if (trig_ == TrigMode::Auto) fire(now);  // "generated automatically as the final step"
   return Error::None;
@@ -67,7 +75,7 @@ Error Channel::trig(TrigMode mode, Tick now) {
     // CANopen has no DEVICE CLEAR, so TRIG HOLD is always accepted and also ends the wait.
     trig_ = TrigMode::Hold;
     if (armed_) {
-      armed_ = false;
+      armed_ = locked_ = false;
       blocking_ = false;
       pending_ = Pending{};
     }
@@ -86,11 +94,11 @@ Error Channel::trig(TrigMode mode, Tick now) {
 }
 
 void Channel::sync(Tick now) {
-  if (armed_ && trig_ == TrigMode::Sys) fire(now);
+  if (armed_ && !locked_ && trig_ == TrigMode::Sys) fire(now);
 }
 
 void Channel::chan0_triggered(Tick now) {
-  if (armed_ && trig_ == TrigMode::Chan0) fire(now);
+  if (armed_ && !locked_ && trig_ == TrigMode::Chan0) fire(now);
 }
 
 Tick Channel::delay_ticks() const { return static_cast<Tick>(delay_ms_) * kClockHz / 1000; }
@@ -105,6 +113,9 @@ void Channel::fire(Tick at) {
     powered_ = true;
     idle_since_.reset();
   }
+  // STANDBY ON in pulse output: "When a MOVE or SUSTAIN command is executed and triggered,
+  // the STBYn output goes low" (3-29, HI sense).
+  if (standby_ == StandbyMode::On) powered_ = true;
   if (on_triggered) on_triggered(at);
   start_at_ = at + delay_ticks();  // DELAY: "all triggers are delayed" (3-14)
   if (*start_at_ <= at) start(at);

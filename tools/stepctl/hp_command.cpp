@@ -50,6 +50,13 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
         od::SdoResult r = bus.upload(id, a.index, 0);
         if (!r.ok()) return refused(a, r);
         int code = static_cast<int8_t>(r.data.at(0));
+        if (code == -3) {
+          // A command without NOWAIT under a trigger other than AUTO: locked in its wait state.
+          std::fprintf(stderr,
+                       "stepctl: waiting for a trigger it cannot get without NOWAIT (HP 3-13 note 1); "
+                       "TRIG HOLD cancels it\n");
+          return 1;
+        }
         if (code != -2) break;
         if (std::chrono::steady_clock::now() > deadline) {
           std::fprintf(stderr, "stepctl: still running after %d s\n", wait_timeout_s);
