@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "node/motion/hp_self_test.hpp"
+
 namespace stepnode::motion::hp {
 
 Channel::Channel(AxisCore& core) : core_(core) {
@@ -129,6 +131,14 @@ Done Channel::done() const {
   if (run_ == Run::Sustain) return sustain_reached_ ? Done::SustainRunning : Done::Running;
   if (core_.busy()) return Done::Running;  // a Horner job on the same axis
   return outcome_;
+}
+
+Error Channel::test(uint8_t& failed) {
+  // Not while pulses go out or a command waits for its trigger (error 89, "A move is in
+  // progress"): a self test is of an idle module.
+  if (blocking_ || armed_ || run_ != Run::Idle || start_at_ || core_.busy()) return accept(Error::AccessoryBusy);
+  failed = run_self_test();
+  return accept(Error::None);
 }
 
 Error Channel::pos(double units) {

@@ -49,6 +49,10 @@ class Channel final : public FrontEnd, public AxisListener {
   void qindex(QIndexMode mode);
   int32_t quadrature_count() const;
   double qpos_query() const { return static_cast<double>(quadrature_count()) * qscale_; }
+  // ---- TEST (Command Summary 4-3): the pass/fail self test (node/motion/hp_self_test.hpp).
+  // Refused while a command is in progress or waits for its trigger (error 89); otherwise
+  // `failed` gets the failed checks (0: passed). The settings stay as they were.
+  Error test(uint8_t& failed);
   // ---- interrupts
   void enable_intr();   // clears, then enables (Command Summary: ENABLE INTR)
   void disable_intr() { intr_enabled_ = false; }

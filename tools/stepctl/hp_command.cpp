@@ -39,6 +39,9 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
       } else if (a.type == od::DataType::Integer8) {
         int code = static_cast<int8_t>(r.data.at(0));
         std::printf("%s %d (%s)\n", a.label.c_str(), code, hp_done_text(code).c_str());
+      } else if (a.label == "TEST") {
+        unsigned n = r.data.at(0);
+        std::printf("TEST %u (%s)\n", n, n == 0 ? "passed" : "failed");
       } else {
         unsigned n = r.data.at(0);
         std::printf("%s %u (%s)\n", a.label.c_str(), n, hp_error_text(n).c_str());

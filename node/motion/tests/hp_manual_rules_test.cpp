@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "node/motion/hp_self_test.hpp"
 #include "node/motion/tests/hp_channel_fixture.hpp"
 
 namespace stepnode::motion::hp {
@@ -228,3 +229,40 @@ TEST_F(HpChannel, HpAppendixA_FreqPulseWidthLimitsAndResolution) {
 }  // namespace
 }  // namespace stepnode::motion::hp
 
+namespace stepnode::motion::hp {
+namespace {
+
+// ---------------------------------------------------------------- TEST (4-3)
+
+// "TEST Initiates a pass/fail self test." It passes on a sound module, leaves the settings
+// and the motor as they were, and is refused while a command is in progress (error 89).
+TEST_F(HpChannel, Hp4_3_TestIsAPassFailSelfTestThatKeepsTheSettings) {
+  ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
+  ASSERT_EQ(ch->pscale(0.1), Error::None);
+  ch->delay(5);
+  uint8_t failed = 0xFF;
+  EXPECT_EQ(ch->test(failed), Error::None);
+  EXPECT_EQ(failed, 0);
+  EXPECT_EQ(run_self_test(), 0);
+  EXPECT_EQ(ch->active_profile().max, 800);
+  EXPECT_EQ(ch->scale(), 0.1);
+  EXPECT_EQ(ch->delay_ms(), 5);
+  EXPECT_EQ(position(), 0);
+  EXPECT_EQ(done(), 0);
+  ASSERT_EQ(ch->move(2, false, true, now), Error::None);
+  wait(100);
+  failed = 0xFF;
+  EXPECT_EQ(ch->test(failed), Error::AccessoryBusy);
+  EXPECT_EQ(failed, 0xFF);
+  wait(2000);
+  ASSERT_EQ(done(), 0);
+  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
+  ASSERT_EQ(ch->move(2, false, true, now), Error::None);  // waits for its trigger
+  EXPECT_EQ(ch->test(failed), Error::AccessoryBusy);
+  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
+  EXPECT_EQ(ch->test(failed), Error::None);
+  EXPECT_EQ(failed, 0);
+}
+
+}  // namespace
+}  // namespace stepnode::motion::hp
