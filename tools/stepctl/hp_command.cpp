@@ -13,6 +13,11 @@ namespace stepnode::tools {
 
 int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string& words, int wait_timeout_s) {
   const auto plan = plan_hp_words(words, channel);  // bad words: nothing is sent
+  return run_hp_plan(bus, node, channel, plan, wait_timeout_s, {});
+}
+
+int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<HpAccess>& plan, int wait_timeout_s,
+                const std::function<void()>& idle) {
   const uint8_t id = static_cast<uint8_t>(node);
   auto refused = [&](const HpAccess& a, const od::SdoResult& r) {
     std::fprintf(stderr, "stepctl: node %d channel %u: 0x%04X:%02X refused: 0x%08X %s\n", node, channel, a.index, a.sub,
@@ -65,9 +70,11 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
           std::fprintf(stderr, "stepctl: still running after %d s\n", wait_timeout_s);
           return 1;
         }
+        if (idle) idle();
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
     }
+    if (idle) idle();
   }
   return 0;
 }
