@@ -49,6 +49,10 @@ class Channel final : public FrontEnd, public AxisListener {
   void qindex(QIndexMode mode);
   int32_t quadrature_count() const;
   double qpos_query() const { return static_cast<double>(quadrature_count()) * qscale_; }
+  // ---- TEST (Command Summary 4-3): the pass/fail self test (node/motion/hp_self_test.hpp).
+  // Refused while a command is in progress or waits for its trigger (error 89); otherwise
+  // `failed` gets the failed checks (0: passed). The settings stay as they were.
+  Error test(uint8_t& failed);
   // ---- interrupts
   void enable_intr();   // clears, then enables (Command Summary: ENABLE INTR)
   void disable_intr() { intr_enabled_ = false; }
@@ -66,6 +70,8 @@ class Channel final : public FrontEnd, public AxisListener {
   Conflict last_conflict() const { return last_conflict_; }
   uint8_t interrupt_events() const { return events_; }
   bool intr_enabled() const { return intr_enabled_; }
+  // A MOVE or SUSTAIN without NOWAIT waits for a trigger it cannot get (3-13 note 1).
+  bool locked_in_wait() const { return armed_ && locked_; }
   const Profile& active_profile() const { return profile_; }
   double scale() const { return position_.scale(); }
   TrigMode trig_mode() const { return trig_; }
@@ -75,8 +81,9 @@ class Channel final : public FrontEnd, public AxisListener {
   bool motor_powered() const { return powered_; }
   // Whether pulses reach a powered motor: STANDBY AUTO applies power before any pulse
   // (whichever front end moves the axis), so only STANDBY ON leaves the motor without
-  // torque while it is pulsed.
-  bool pulses_reach_powered_motor() const { return standby_ != StandbyMode::On; }
+  // torque while it is pulsed, except for the channel's own WIDTH-mode pulse train, which
+  // the STBY output follows (3-29).
+  bool pulses_reach_powered_motor() const { return standby_ != StandbyMode::On || powered_; }
   bool stby_output_high() const { return !powered_ == standby_high_; }
   const PulseSetup& pulse_setup() const { return pulse_; }
   HaltMode halt_mode() const { return halt_mode_; }
@@ -84,7 +91,9 @@ class Channel final : public FrontEnd, public AxisListener {
   double qscale() const { return qscale_; }
   bool plim_sense_high() const { return plim_high_; }
   bool nlim_sense_high() const { return nlim_high_; }
-  double current_width() const;  // WIDTH mode: the pulse width now (s)
+  // The width of the pulses at the outputs now (s; the last pulse's, to 1 us): the PROFILE
+  // FREQ pwidth, or the width a WIDTH-mode SUSTAIN has ramped to; 0 without a pulse train.
+  double current_width() const;
   // The last triggered action: trigger tick and first step tick.
   std::optional<Tick> trigger_time() const { return trigger_time_; }
   std::optional<Tick> first_step_time() const { return first_step_; }
@@ -115,10 +124,14 @@ class Channel final : public FrontEnd, public AxisListener {
   void change_sustain_velocity(double target, Tick at);
   bool below_rate_resolution(double rate) const;
   double current_width_at(Tick t) const;
+  uint32_t width_ns_at(Tick t) const;  // a pulse's width at the outputs at `t`, 1 us resolution
+  void replan_widths(Tick at);
   void end(Done how, uint8_t event, Tick at);
   void interrupt(uint8_t event, Tick at);
   bool limit_active(int direction) const;
   bool halt_active() const;
+  // A WIDTH-mode SUSTAIN triggered and not ended: general purpose pulse output (3-23).
+  bool pulse_train() const { return profile_.mode == ProfileMode::Width && (run_ != Run::Idle || start_at_); }
   // The HALT input changed (its edge, input_changed): a halt when it now reads active.
   void halt_input_changed(Tick now);
   // FrontEnd: the channel's own jobs.
@@ -155,6 +168,7 @@ class Channel final : public FrontEnd, public AxisListener {
   // State.
   Pending pending_;
   bool armed_ = false;               // a MOVE/SUSTAIN waits for its trigger
+  bool locked_ = false;              // ...given without NOWAIT: no trigger reaches it (3-13)
   std::optional<Tick> start_at_;     // triggered, starting after DELAY
   bool blocking_ = false;            // a command without NOWAIT has not finished
   Run run_ = Run::Idle;

@@ -15,13 +15,17 @@ namespace stepnode::motion {
 
 // One step as the HP 44714A's outputs carry it (PULSE SD|SS, HP manual 3-7): the output it
 // appears at and the NDIR level during it, with what the driver wired to them reads as
-// positive motion.
+// positive motion, and how long the pulse lasts (PROFILE FREQ's pwidth, 3-8, or the width
+// a WIDTH-mode SUSTAIN has ramped to, 3-25..3-27).
 struct OutputPulse {
   bool step_direction = false;       // SD: every pulse on PSTP, NDIR is the direction
   bool on_ndir = false;              // SS: this pulse is on NDIR (negative motion)
   bool ndir_level = false;           // NDIR during the pulse
   bool ndir_positive_level = false;  // SD: the NDIR level that means positive motion
   bool pstp_level = false;           // PSTP during the pulse (its pulse sense)
+  // The pulse's width in ns (1 us resolution and at most 65.535 ms by appendix A); 0: not
+  // given (a step sink that makes its own pulse).
+  uint32_t width_ns = 0;
 };
 
 // The direction a driver set up for `p`'s mode reads from it (+1 / -1).
@@ -41,6 +45,7 @@ class StepPort {
   virtual void queue(Tick time, int direction) = 0;
   // The same given as output signals (the HP channel's PULSE modes): a driver decodes the
   // direction from the outputs, so the motor follows the wiring, not the engine's intent.
+  // A back end that makes pulses of a given width (p.width_ns) overrides this.
   virtual void queue_pulse(Tick time, const OutputPulse& p) { queue(time, direction_of(p)); }
   // Every step queued up to `until` goes out (a hardware back end has sent it to the pulse
   // hardware; the simulation moves the motor); the back end's clock is at `until`.

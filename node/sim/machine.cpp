@@ -27,18 +27,34 @@ void AxisMachine::step(motion::Tick time, int direction) {
   move(time, d);
 }
 
+void AxisMachine::queue_pulse(motion::Tick time, const motion::OutputPulse& p) {
+  steps_.push(time, motion::direction_of(p));
+  if (p.width_ns) widths_.push_back({time, p.width_ns});
+}
+
 void AxisMachine::flush(motion::Tick until) {
   while (steps_.due(until)) {
     motion::StepQueue::Entry e = steps_.pop();
-    move(e.time, e.direction);
+    uint32_t width = 0;
+    if (!widths_.empty() && widths_.front().time == e.time) {
+      width = widths_.front().width_ns;
+      widths_.pop_front();
+    }
+    move(e.time, e.direction, width);
   }
   clock_ = std::max(clock_, until);
 }
 
-void AxisMachine::move(motion::Tick time, int direction) {  // direction: +1 / -1
+void AxisMachine::cancel_after(motion::Tick after) {
+  steps_.cancel_after(after);
+  while (!widths_.empty() && widths_.back().time > after) widths_.pop_back();
+}
+
+void AxisMachine::move(motion::Tick time, int direction, uint32_t width_ns) {  // direction: +1 / -1
   ++pulses_;
   last_step_time_ = clock_ = time;  // steps come in time order, each after the last flush
-  if (trace_) [[unlikely]] record(time, direction);
+  last_width_ns_ = width_ns;
+  if (trace_ || pulse_trace_) [[unlikely]] record(time, direction, width_ns);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping
@@ -50,8 +66,10 @@ void AxisMachine::move(motion::Tick time, int direction) {  // direction: +1 / -
 }
 
 // Out of line: the hot path of move() stays as small as it was without a trace.
-__attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction) {
-  trace_->push_back({time, direction >= 0 ? +1 : -1});
+__attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction, uint32_t width_ns) {
+  const int d = direction >= 0 ? +1 : -1;
+  if (trace_) trace_->push_back({time, d});
+  if (pulse_trace_) pulse_trace_->push_back({time, d, width_ns});
 }
 
 motion::InputLevels AxisMachine::sensed() const {

@@ -46,6 +46,14 @@ struct TracedStep {
   bool operator==(const TracedStep&) const = default;
 };
 
+// One pulse as the drive received it, with its width in ns (0: given without one).
+struct TracedPulse {
+  motion::Tick time;
+  int direction;
+  uint32_t width_ns;
+  bool operator==(const TracedPulse&) const = default;
+};
+
 class AxisMachine : public motion::MotorPort {
  public:
   explicit AxisMachine(AxisMachineConfig config = {});
@@ -56,8 +64,11 @@ class AxisMachine : public motion::MotorPort {
   motion::Tick horizon() const override { return horizon_; }
   void set_horizon(motion::Tick ticks) { horizon_ = ticks; }
   void queue(motion::Tick time, int direction) override { steps_.push(time, direction); }
+  // A pulse given as output signals: the drive follows the direction the outputs say, and
+  // the machine records the pulse's width (HP 44714A WIDTH mode, 3-25..3-27).
+  void queue_pulse(motion::Tick time, const motion::OutputPulse& p) override;
   void flush(motion::Tick until) override;
-  void cancel_after(motion::Tick after) override { steps_.cancel_after(after); }
+  void cancel_after(motion::Tick after) override;
   std::optional<int64_t> position_at(motion::Tick time) const override { return steps_.position_at(time); }
   std::size_t queued() const { return steps_.queued(); }
 
@@ -104,9 +115,14 @@ class AxisMachine : public motion::MotorPort {
   int64_t encoder_count() const override;
   int64_t encoder_counts_per_rev() const;
   uint64_t pulses_received() const { return pulses_; }
+  // The width of the last pulse received (ns): 0 for a step given without one (a step
+  // sink, a Horner or CiA 402 job).
+  uint32_t last_pulse_width_ns() const { return last_width_ns_; }
   // Appends every step pulse received from now on to `trace` (nullptr: stop). The golden
   // step-train test records the engine's output through this.
   void trace_into(std::vector<TracedStep>* trace) { trace_ = trace; }
+  // The same with each pulse's width (the outputs as a scope would see them).
+  void trace_pulses_into(std::vector<TracedPulse>* trace) { pulse_trace_ = trace; }
   motion::Tick last_step_time() const { return last_step_time_; }
 
   // The configuration; changing it through here is a change of the inputs from outside.
@@ -128,6 +144,15 @@ class AxisMachine : public motion::MotorPort {
   bool halt_high_ = true;
   motion::StepQueue steps_;
   std::vector<TracedStep>* trace_ = nullptr;
+  std::vector<TracedPulse>* pulse_trace_ = nullptr;
+  // The widths of the queued pulses that have one, in time order (a step without a width
+  // costs nothing here), and the width of the last pulse that went out.
+  struct QueuedWidth {
+    motion::Tick time;
+    uint32_t width_ns;
+  };
+  std::deque<QueuedWidth> widths_;
+  uint32_t last_width_ns_ = 0;
   // The inputs: the levels last reported, the positions between which none of the
   // position's switches changes (so a step costs two comparisons), the edges not read.
   motion::InputLevels reported_;
@@ -135,8 +160,8 @@ class AxisMachine : public motion::MotorPort {
   bool changed_ = true;
   std::deque<motion::InputEdge> edges_;
 
-  void move(motion::Tick time, int direction);
-  void record(motion::Tick time, int direction);
+  void move(motion::Tick time, int direction, uint32_t width_ns = 0);
+  void record(motion::Tick time, int direction, uint32_t width_ns);
   motion::InputLevels sensed() const;
   void sense(motion::Tick time);
   void find_steady_range();

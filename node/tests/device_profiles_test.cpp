@@ -41,7 +41,7 @@ TEST_F(DeviceProfiles, AnHpOnlyDeviceHasOnlyTheChannelsObjects) {
   for (uint16_t i : eds_manufacturer_objects()) {
     SCOPED_TRACE(testing::Message() << std::hex << i);
     const unsigned offset = i & 0xFF;
-    const bool hp = i < 0x2800 && offset >= 0x10 && offset <= 0x1E;
+    const bool hp = i < 0x2800 && offset >= 0x10 && offset <= 0x1F;
     const bool sim = i >= 0x5000 && (offset <= 0x05 || i == 0x5F00);
     EXPECT_TRUE(hp || sim || i == 0x2F10 || i == 0x2F11);
   }

@@ -413,5 +413,44 @@ TEST_F(HpBus, StandbyOnLeavesTheMotorUnpoweredSoHornerStepsMoveNothing) {
   EXPECT_EQ(mechanical(), 50);
 }
 
+// 3-28's WIDTH example over the bus (issue 11 item 12): 0x2n16:10 shows the width at the
+// outputs now, 0x5n05:3 the width of the last pulse the simulated drive received; with
+// STANDBY ON the STBY output follows the pulse train (3-29) and the unpowered motor of a
+// stepper is powered only while it runs.
+TEST_F(HpBus, Hp3_28_WidthExamplePulseWidthsAndStbyOverTheBus) {
+  uint16_t out = index(0, kOutput);
+  ASSERT_EQ(sdo_write(out, hp44714a::output_sub::kStandbyMode, 1, 1), 0u);  // STANDBY ON (HI)
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 1u);
+  ASSERT_EQ(profile(1, 1e-3, 10e-3, 5e-3, 20e-3), 0u);
+  ASSERT_EQ(sustain(2e-3, true), 0u);
+  EXPECT_EQ(error(), 0);
+  wait_s(0.1);
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 0u);
+  EXPECT_NEAR(get(out, hp44714a::output_sub::kPulseWidth), 1.5e-3, 0.03e-3);
+  wait_s(0.5);
+  EXPECT_EQ(get(out, hp44714a::output_sub::kPulseWidth), 2e-3);
+  EXPECT_EQ(*sdo_read(sim_index(0), hp44714a::sim_sub::kLastPulseWidthNs), 2'000'000u);
+  EXPECT_GT(mechanical(), 0) << "STBY powers the drive during the pulse train";
+  ASSERT_EQ(put_int<uint8_t>(index(0, kLimits), hp44714a::limits_sub::kHaltSgl, 1), 0u);
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kStbyLevel), 1u);
+  EXPECT_EQ(get(out, hp44714a::output_sub::kPulseWidth), 0);
+  EXPECT_EQ(*sdo_read(out, hp44714a::output_sub::kMotorPowered), 0u);
+}
+
+// TEST (Command Summary 4-3) over the bus: the answer in 0x2n1F:2 (0 passed), refused with
+// error 89 while a move is in progress.
+TEST_F(HpBus, Hp4_3_TestAnswersPassOrFail) {
+  const uint16_t t = index(0, kTest);
+  ASSERT_EQ(put_int<uint8_t>(t, hp44714a::test_sub::kRun, 1), 0u);
+  EXPECT_EQ(*sdo_read(t, hp44714a::test_sub::kResult), 0u);
+  EXPECT_EQ(*sdo_read(t, hp44714a::test_sub::kFailedChecks), 0u);
+  ASSERT_EQ(move(50, false, true), 0u);
+  EXPECT_EQ(put_int<uint8_t>(t, hp44714a::test_sub::kRun, 1), kDeviceState);
+  EXPECT_EQ(error(), 89);
+  wait_s(2);
+  EXPECT_EQ(put_int<uint8_t>(t, hp44714a::test_sub::kRun, 1), 0u);
+  EXPECT_EQ(error(), 0);
+}
+
 }  // namespace
 }  // namespace stepnode::node::test

@@ -13,6 +13,11 @@ namespace stepnode::tools {
 
 int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string& words, int wait_timeout_s) {
   const auto plan = plan_hp_words(words, channel);  // bad words: nothing is sent
+  return run_hp_plan(bus, node, channel, plan, wait_timeout_s, {});
+}
+
+int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<HpAccess>& plan, int wait_timeout_s,
+                const std::function<void()>& idle) {
   const uint8_t id = static_cast<uint8_t>(node);
   auto refused = [&](const HpAccess& a, const od::SdoResult& r) {
     std::fprintf(stderr, "stepctl: node %d channel %u: 0x%04X:%02X refused: 0x%08X %s\n", node, channel, a.index, a.sub,
@@ -39,6 +44,9 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
       } else if (a.type == od::DataType::Integer8) {
         int code = static_cast<int8_t>(r.data.at(0));
         std::printf("%s %d (%s)\n", a.label.c_str(), code, hp_done_text(code).c_str());
+      } else if (a.label == "TEST") {
+        unsigned n = r.data.at(0);
+        std::printf("TEST %u (%s)\n", n, n == 0 ? "passed" : "failed");
       } else {
         unsigned n = r.data.at(0);
         std::printf("%s %u (%s)\n", a.label.c_str(), n, hp_error_text(n).c_str());
@@ -50,14 +58,23 @@ int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string
         od::SdoResult r = bus.upload(id, a.index, 0);
         if (!r.ok()) return refused(a, r);
         int code = static_cast<int8_t>(r.data.at(0));
+        if (code == -3) {
+          // A command without NOWAIT under a trigger other than AUTO: locked in its wait state.
+          std::fprintf(stderr,
+                       "stepctl: waiting for a trigger it cannot get without NOWAIT (HP 3-13 note 1); "
+                       "TRIG HOLD cancels it\n");
+          return 1;
+        }
         if (code != -2) break;
         if (std::chrono::steady_clock::now() > deadline) {
           std::fprintf(stderr, "stepctl: still running after %d s\n", wait_timeout_s);
           return 1;
         }
+        if (idle) idle();
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
     }
+    if (idle) idle();
   }
   return 0;
 }

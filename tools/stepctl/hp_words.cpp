@@ -189,6 +189,15 @@ struct Planner {
     u8(kQuadrature, hp44714a::quad_sub::kQindex, modes.at(m));
   }
 
+  // TEST [slot]: the pass/fail self test (Command Summary 4-3), then its answer. The slot is
+  // the node (--node): a number given is checked and not sent.
+  void test(const Words& w) {
+    need(w, 0, 1);
+    if (w.size() > 1) number(w[0], w[1]);
+    u8(kTest, hp44714a::test_sub::kRun, 1);
+    read(kTest, hp44714a::test_sub::kResult, od::DataType::Unsigned8, "TEST");
+  }
+
   // ENABLE INTR, DISABLE INTR.
   void interrupts(const Words& w) {
     const std::string& c = w[0];
@@ -208,7 +217,7 @@ struct Planner {
         {"HALT", &Planner::halt},       {"POS", &Planner::pos},         {"POS?", &Planner::query},
         {"DONE?", &Planner::query},     {"ERR?", &Planner::query},      {"ERROR?", &Planner::query},
         {"QSCALE", &Planner::qscale},   {"QINDEX", &Planner::qindex},   {"QPOS?", &Planner::query},
-        {"ENABLE", &Planner::interrupts}, {"DISABLE", &Planner::interrupts},
+        {"ENABLE", &Planner::interrupts}, {"DISABLE", &Planner::interrupts}, {"TEST", &Planner::test},
     };
     const auto h = handlers.find(c);
     if (h == handlers.end()) throw std::invalid_argument("'" + c + "' is not an HP 44714A command");

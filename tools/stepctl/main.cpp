@@ -154,7 +154,7 @@ struct Options {
   double jog_seconds = 1.0;
   bool quiet = false;
   // HP 44714A words.
-  std::string hp_words;
+  std::string hp_words, hp_program;
   int hp_channel = 0, hp_wait_s = 120;
   DriveArgs drive_args;
 };
@@ -233,11 +233,24 @@ void add_axis_commands(CLI::App& app, Options& o) {
 CLI::App* add_hp_command(CLI::App& app, Options& o) {
   auto* hp = app.add_subcommand("hp", "HP 44714A commands in the manual's words, ';' between commands; "
                                       "queries (POS?, DONE?, QPOS?, ERR?) print the answer");
-  hp->add_option("words", o.hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"")->required();
+  hp->add_option("words", o.hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"");
+  hp->add_option("--program", o.hp_program,
+                 "an HP BASIC listing of the module's commands (OUTPUT 709;\"...\", PAUSE, END; USE, WAIT, RST, "
+                 "ON INTR CALL, SUB/SUBEND, BEEP in the strings), run in line-number order");
   hp->add_option("--node", o.node, "node id 1..127")->required()->check(CLI::Range(1, 127));
   hp->add_option("--axis", o.hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
   hp->add_option("--wait", o.hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
   return hp;
+}
+
+// The text of `stepctl hp --program FILE` (unreadable: exit 2).
+std::string read_listing(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument("hp --program: cannot read '" + path + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  if (text.str().empty()) throw std::invalid_argument("hp --program: '" + path + "' is empty");
+  return text.str();
 }
 
 // A refusal of the node or of the drive is a runtime failure (exit 1); bad words were
@@ -255,7 +268,13 @@ int as_failure(F run) {
 int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
   ObjectCatalog catalog(o.eds);
   if (*s.watch) return run_watch(o.iface, catalog, o.passive, o.seconds);
-  if (*s.hp) plan_hp_words(o.hp_words, static_cast<unsigned>(o.hp_channel));  // bad words: exit 2 before the bus
+  std::string listing;
+  if (*s.hp) {  // bad words: exit 2 before the bus
+    if (o.hp_words.empty() == o.hp_program.empty())
+      throw std::invalid_argument("hp: give either the words or --program FILE");
+    if (o.hp_program.empty()) plan_hp_words(o.hp_words, static_cast<unsigned>(o.hp_channel));
+    else check_hp_program(listing = read_listing(o.hp_program), static_cast<unsigned>(o.hp_channel));
+  }
   std::optional<SdoCobIds> channel;
   if (!o.sdo_cob_ids.empty()) channel = parse_sdo_cob_ids(o.sdo_cob_ids);  // bad: exit 2 before the bus
   MasterBus bus(o.iface);
@@ -265,6 +284,8 @@ int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
   if (*s.read) return cmd_read(bus, catalog, o.node, o.object, o.block, o.output);
   if (*s.write) return cmd_write(bus, catalog, o.node, o.object, o.value, o.type_name, o.block);
   if (*s.dump) return cmd_dump(bus, catalog, o.node);
+  if (*s.hp && !listing.empty())
+    return run_hp_program(bus, o.node, static_cast<unsigned>(o.hp_channel), listing, o.hp_wait_s);
   if (*s.hp) return run_hp_command(bus, o.node, static_cast<unsigned>(o.hp_channel), o.hp_words, o.hp_wait_s);
   if (*s.drive) return as_failure([&] { return run_drive_command(bus, catalog, o.drive_args); });
   for (const char* verb : kAxisVerbs) {

@@ -59,6 +59,9 @@ void add_channel(od::Dictionary& od, unsigned a) {
       .pdo_sampled = true;
   out.add(output_sub::kNdirPulses, "Pulses on NDIR", DT::Unsigned32, AC::ReadOnly, encode<uint32_t>(0), true)
       .pdo_sampled = true;
+  // The width of the pulses at the outputs now (3-25..3-29): pwidth (FREQ) or the ramped width (WIDTH).
+  out.add(output_sub::kPulseWidth, "Pulse width now (s)", DT::Real64, AC::ReadOnly, encode<double>(0), true)
+      .pdo_sampled = true;
 
   Object& lim = od.record(index(a, kLimits), name(a, "HARDLIM and HALT"));
   limits<uint8_t>(lim.add(limits_sub::kPlimSense, "HARDLIM PLIM sense (0 LO, 1 HI)", DT::Unsigned8, AC::ReadWrite, {0}), 0, 1);
@@ -71,7 +74,11 @@ void add_channel(od::Dictionary& od, unsigned a) {
   od.var(index(a, kConflict), name(a, "PROFILE settings conflict"), DT::Unsigned8, AC::ReadOnly, {0}, true);
   command(od.var(index(a, kPosition), name(a, "POS / POS?"), DT::Real64, AC::ReadWrite, encode<double>(0), true))
       .pdo_sampled = true;
+}
 
+// The quadrature counter, interrupts, timing, TEST and the simulated terminal inputs.
+void add_channel_counters(od::Dictionary& od, unsigned a) {
+  using namespace obj;
   Object& q = od.record(index(a, kQuadrature), name(a, "quadrature counter"));
   q.add(quad_sub::kQscale, "QSCALE units per count", DT::Real64, AC::ReadWrite, encode<double>(1.0));
   limits<uint8_t>(command(q.add(quad_sub::kQindex, "QINDEX (0 OFF, 1 ONCE, 2 SGL)", DT::Unsigned8, AC::ReadWrite, {0})), 0, 2);
@@ -92,10 +99,21 @@ void add_channel(od::Dictionary& od, unsigned a) {
   t.add(timing_sub::kFirstStepAfterTriggerUs, "First step after the trigger (us, -1 none yet)", DT::Integer32,
         AC::ReadOnly, encode<int32_t>(-1), true);
 
+  // TEST (Command Summary 4-3): a pass/fail self test; the answer of the last one.
+  Object& test = od.record(index(a, kTest), name(a, "TEST"));
+  limits<uint8_t>(command(test.add(test_sub::kRun, "TEST (write 1)", DT::Unsigned8, AC::ReadWrite, {0})), 0, 1);
+  test.add(test_sub::kResult, "TEST result (0 passed, 1 failed)", DT::Unsigned8, AC::ReadOnly, {0}, true);
+  test.add(test_sub::kFailedChecks, "TEST failed checks (1 outputs, 2 pulse engine, 4 position counter, 8 PROFILE rules)",
+           DT::Unsigned8, AC::ReadOnly, {0}, true);
+
   Object& sim = od.record(sim_index(a), "Simulated axis " + std::to_string(a + 1) + " HP terminal inputs");
   limits<uint8_t>(command(sim.add(sim_sub::kHaltInputHigh, "HALT input level (1 high: switch open)", DT::Unsigned8,
                                   AC::ReadWrite, {1})), 0, 1);
   limits<uint8_t>(command(sim.add(sim_sub::kTestJumper, "TEST jumper set", DT::Unsigned8, AC::ReadWrite, {0})), 0, 1);
+  // What the simulated drive received: the width of the last pulse (0: a step without one).
+  sim.add(sim_sub::kLastPulseWidthNs, "Width of the last pulse received (ns)", DT::Unsigned32, AC::ReadOnly,
+          encode<uint32_t>(0), true)
+      .pdo_sampled = true;
 }
 
 // TPDO 4n+4: DONE?, the error number and the interrupt event word (24 bits), on change.
@@ -111,6 +129,7 @@ void map_tpdo(od::Dictionary& od, unsigned a) {
 void add_objects(od::Dictionary& od, unsigned axes) {
   for (unsigned a = 0; a < axes; ++a) {
     add_channel(od, a);
+    add_channel_counters(od, a);
     map_tpdo(od, a);
   }
 }

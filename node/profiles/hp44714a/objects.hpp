@@ -1,4 +1,4 @@
-// The HP 44714A channel objects of each axis (0x2n10-0x2n1E, next to the Horner registers
+// The HP 44714A channel objects of each axis (0x2n10-0x2n1F, next to the Horner registers
 // 0x2n00-0x2n0A of node/profiles/horner), the simulated terminal-module inputs (0x5n05) and
 // the default mapping of TPDO 4n+4. Pure table: node/profiles/hp44714a/service.cpp connects them to the
 // channels. Commands are writes: a write that the channel refuses is answered with an SDO
@@ -26,10 +26,11 @@ constexpr uint16_t kPosition = 0x1B;     // REAL64: write POS, read POS?
 constexpr uint16_t kQuadrature = 0x1C;   // RECORD: QSCALE, QINDEX, QPOS?, raw count
 constexpr uint16_t kInterrupt = 0x1D;    // RECORD: ENABLE/DISABLE INTR, event word
 constexpr uint16_t kTiming = 0x1E;       // RECORD: trigger and first-step times (node clock)
+constexpr uint16_t kTest = 0x1F;         // RECORD: TEST (write 1), result (0 pass, 1 fail), failed checks
 inline uint16_t index(unsigned axis, uint16_t offset) {
   return static_cast<uint16_t>(0x2000 + 0x100 * axis + offset);
 }
-constexpr uint16_t kSimInputs = 0x05;  // 0x5n05 RECORD: HALT input level, TEST jumper
+constexpr uint16_t kSimInputs = 0x05;  // 0x5n05 RECORD: HALT input level, TEST jumper, last pulse width
 inline uint16_t sim_index(unsigned axis) { return static_cast<uint16_t>(0x5000 + 0x100 * axis + kSimInputs); }
 }  // namespace obj
 
@@ -41,7 +42,7 @@ constexpr uint8_t kRelative = 1, kAbsolute = 2, kNowait = 3;
 }
 namespace output_sub {
 constexpr uint8_t kStandbyMode = 1, kStandbySense = 2, kPulseMode = 3, kPstpSense = 4, kNdirSense = 5,
-                  kStbyLevel = 6, kMotorPowered = 7, kPstpPulses = 8, kNdirPulses = 9;
+                  kStbyLevel = 6, kMotorPowered = 7, kPstpPulses = 8, kNdirPulses = 9, kPulseWidth = 10;
 }
 namespace limits_sub {
 constexpr uint8_t kPlimSense = 1, kNlimSense = 2, kHaltMode = 3, kHaltSgl = 4;
@@ -55,8 +56,11 @@ constexpr uint8_t kEnable = 1, kEvents = 2;
 namespace timing_sub {
 constexpr uint8_t kTriggerUs = 1, kFirstStepUs = 2, kFirstStepAfterTriggerUs = 3;
 }
+namespace test_sub {
+constexpr uint8_t kRun = 1, kResult = 2, kFailedChecks = 3;
+}
 namespace sim_sub {
-constexpr uint8_t kHaltInputHigh = 1, kTestJumper = 2;
+constexpr uint8_t kHaltInputHigh = 1, kTestJumper = 2, kLastPulseWidthNs = 3;
 }
 
 // EMCY codes (manufacturer-specific): an HP error number n is 0xFF00 + n (0xFF59..0xFF5E);

@@ -196,6 +196,14 @@ void HpService::install_counter_hooks(unsigned a) {
   od.at(index(a, kInterrupt), hp44714a::intr_sub::kEnable).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);
   };
+  hook(kTest, hp44714a::test_sub::kRun, [this, a, &ch, &od](std::span<const uint8_t> d) {
+    if (u8(d) != 1) return SdoAbort::None;
+    uint8_t failed = 0;
+    if (hp::Error e = ch.test(failed); e != hp::Error::None) return result(a, e);
+    od.put<uint8_t>(index(a, kTest), hp44714a::test_sub::kResult, failed ? 1 : 0);
+    od.put<uint8_t>(index(a, kTest), hp44714a::test_sub::kFailedChecks, failed);
+    return SdoAbort::None;
+  });
   uint16_t sim = sim_index(a);
   od::listen(od.at(sim, hp44714a::sim_sub::kHaltInputHigh), [this, a, sim] {
     // The simulated HALT switch is an input of the motor's port: the channel sees its edge.
@@ -258,6 +266,8 @@ void HpService::publish(unsigned a) {
   axes_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
   od.put<uint32_t>(out, hp44714a::output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
   od.put<uint32_t>(out, hp44714a::output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
+  od.put<double>(out, hp44714a::output_sub::kPulseWidth, ch.current_width());
+  od.put<uint32_t>(sim_index(a), hp44714a::sim_sub::kLastPulseWidthNs, axes_.machine().axes.at(a).last_pulse_width_ns());
   od.put<double>(index(a, kPosition), 0, ch.pos_query());
   od.put<int32_t>(index(a, kQuadrature), hp44714a::quad_sub::kCount, ch.quadrature_count());
   uint16_t t = index(a, kTiming);

@@ -73,6 +73,41 @@ TEST(HpWords, DefaultsOfTrigStandbyQindexAndSenses) {
   EXPECT_EQ(plan_hp_words("HALT OFF", 0)[0].data, od::Bytes{2});
 }
 
+// Command Summary 4-2: "HARDLIM PLIMn_sense [NLIMn_sense]"; without NLIMn_sense the
+// negative limit takes the positive one's sense, as "HARDLIM HI USE 402" sets both (3-17).
+TEST(HpWords, Hp4_2_HardlimNlimSenseDefaultsToPlims) {
+  auto h = plan_hp_words("HARDLIM HI", 0);
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0].sub, hp44714a::limits_sub::kPlimSense);
+  EXPECT_EQ(h[0].data, od::Bytes{1});
+  EXPECT_EQ(h[1].sub, hp44714a::limits_sub::kNlimSense);
+  EXPECT_EQ(h[1].data, od::Bytes{1});
+  h = plan_hp_words("HARDLIM LO", 1);
+  EXPECT_EQ(h[1].index, 0x2117);
+  EXPECT_EQ(h[1].data, od::Bytes{0});
+  h = plan_hp_words("HARDLIM HI LO", 0);
+  EXPECT_EQ(h[0].data, od::Bytes{1});
+  EXPECT_EQ(h[1].data, od::Bytes{0});
+  EXPECT_THROW(plan_hp_words("HARDLIM", 0), std::invalid_argument);
+}
+
+// Command Summary 4-3: "TEST Initiates a pass/fail self test. Syntax: TEST slot": the test,
+// then its answer read back (the slot is the node given with --node).
+TEST(HpWords, Hp4_3_TestRunsTheSelfTestAndReadsItsAnswer) {
+  for (const char* words : {"TEST", "TEST 5"}) {
+    auto t = plan_hp_words(words, 2);
+    ASSERT_EQ(t.size(), 2u) << words;
+    EXPECT_EQ(t[0].kind, HpAccess::Write);
+    EXPECT_EQ(t[0].index, 0x221F);
+    EXPECT_EQ(t[0].sub, hp44714a::test_sub::kRun);
+    EXPECT_EQ(t[0].data, od::Bytes{1});
+    EXPECT_EQ(t[1].kind, HpAccess::Read);
+    EXPECT_EQ(t[1].sub, hp44714a::test_sub::kResult);
+    EXPECT_EQ(t[1].label, "TEST");
+  }
+  EXPECT_THROW(plan_hp_words("TEST FIVE", 0), std::invalid_argument);
+}
+
 TEST(HpWords, QueriesReadAndSeveralCommandsInOneString) {
   auto p = plan_hp_words("POS 0; PSCALE 2; MOVE 1 REL; POS?", 0);
   ASSERT_EQ(p.size(), 6u);

@@ -1,0 +1,12 @@
+OUTPUT 709;"USE 400"                !Slot 4 Channel 00
+OUTPUT 709;"PROFILE WIDTH 1E-3 10E-3 5E-3 20E-3" !Set width profile
+OUTPUT 709;"ON INTR CALL INTRUPT"    !Call the subroutine on interrupt
+OUTPUT 709;"ENABLE INTR SYS"        !Enable the system interrupt
+OUTPUT 709;"ENABLE INTR"            !Enable the HP 44714A interrupt
+OUTPUT 709;"SUB INTRUPT"            !Subroutine INTRUPT
+OUTPUT 709;" BEEP"                  !Action taken on interrupt
+OUTPUT 709;" ENABLE INTR"          !Reenable HP 44714A to interrupt(1)
+OUTPUT 709;"SUBEND"                !End of servicing subroutine
+OUTPUT 709;"SUSTAIN 2E-3"           !Interrupts and beeps when 2 mS reached
+OUTPUT 709;"WAIT 10"                !Wait
+OUTPUT 709;"HALT SGL"              !Interrupts and beeps when pulses halt
