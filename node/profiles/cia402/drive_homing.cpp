@@ -1,6 +1,7 @@
 // Homing mode carried out on the motion core: the searches of the method (homing.hpp)
 // one after the other, each ended by its input event, and the homing status.
 #include <algorithm>
+#include <cstddef>
 
 #include "node/profiles/cia402/drive.hpp"
 
@@ -59,9 +60,19 @@ void Drive::homing_step(const motion::Step& step) {
         return homing_done(true, step.time);
     }
   }
-  // A limit switch the search does not look for: the method cannot be performed here.
+  // A limit switch the search does not look for: a search that may lead away from the
+  // home switch turns back there once (the same search the other way, after the ramp);
+  // otherwise the method cannot be performed here.
   const bool limit = step.direction < 0 ? in.negative_limit : in.positive_limit;
   const bool wanted = s.until == (step.direction < 0 ? HomingEvent::NegativeLimitOn : HomingEvent::PositiveLimitOn);
+  if (limit && !wanted && s.reverse_at_limit) {
+    HomingSearch back = s;
+    back.direction = -s.direction;
+    back.reverse_at_limit = false;
+    searches_.insert(searches_.begin() + static_cast<std::ptrdiff_t>(search_) + 1, back);
+    search_stopping_ = true;
+    return core_.stop(step.time);
+  }
   if (limit && !wanted) {
     core_.halt(*this, step.time);
     homing_done(false, step.time);
