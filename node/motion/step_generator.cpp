@@ -106,6 +106,10 @@ void StepGenerator::end_interval() {
     level_ = decel_floor_;
     phase_ = MotionPhase::Running;
     marks_.decel_end = t_;
+    if (distance_) {
+      holding_ = false;  // a move to a target ramps down to it from the lower velocity
+      plan_decel();
+    }
     reached_velocity();
     return;
   }
@@ -246,7 +250,10 @@ namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   peeked_ = kUnpeeked;  // the next step may move
-  if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
+  if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
+  // Already ramping down to the target: that ramp stays (slowing to a lower velocity first
+  // at the same deceleration would end at the same place and time).
+  if (distance_ && phase_ == MotionPhase::Decelerating && !holding_) return;
   advance_to(at);
   then_ = std::move(then);
   // Never below one level: at level 0 the motion would stand still for ever and the next
@@ -269,6 +276,7 @@ void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSp
     interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
   } else {
     phase_ = MotionPhase::Running;  // already there: hold it
+    plan_decel();
     reached_velocity();
   }
 }
