@@ -251,14 +251,15 @@ namespace stepnode::motion {
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
-  // Already ramping down to the target: that ramp stays (slowing to a lower velocity first
-  // at the same deceleration would end at the same place and time).
-  if (distance_ && phase_ == MotionPhase::Decelerating && !holding_) return;
   advance_to(at);
-  then_ = std::move(then);
   // Never below one level: at level 0 the motion would stand still for ever and the next
   // step's time divides by the level (a 0 Hz minimum makes base_level 0).
   level = std::max({level, ramp_.base_level, int64_t{1}});
+  // Already ramping down to the target: a lower velocity leaves that ramp as it is (slowing
+  // to it first at the same deceleration ends at the same place and time); a higher one
+  // ramps up again.
+  if (distance_ && phase_ == MotionPhase::Decelerating && !holding_ && level <= level_) return;
+  then_ = std::move(then);
   if (level > level_) {
     // Intervals at level+1 .. target, Z_A each (the same convention as a start).
     peak_level_ = level;

@@ -165,7 +165,10 @@ void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
   const bool limit = step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
-  if (!limit) return;
+  if (!limit) {
+    if (next_ && next_->through && core_.position() == active_->target) pass_first_target(step.time);
+    return;
+  }
   core_.halt(*this, step.time);
   active_.reset();
   next_.reset();

@@ -32,7 +32,7 @@ void Drive::new_set_point(uint16_t cw, Tick now) {
   // Bit 6: relative to the preceding target position (60F2h's default), or to where the
   // trajectory is when there was none.
   const int64_t base = (cw & cw_pp::kRelative) ? last_target_.value_or(position_demand()) : 0;
-  SetPoint sp{clamp_to_limits(base + target_position_)};
+  SetPoint sp{clamp_to_limits(base + target_position_), parameters_.profile_velocity};
   last_target_ = sp.target;
   acknowledged_ = true;
   target_reached_ = false;
@@ -43,8 +43,12 @@ void Drive::new_set_point(uint16_t cw, Tick now) {
     return start_positioning(sp, now);
   }
   if (!immediately) {
-    if (active_) next_ = sp;  // carried out when the running one is done
-    else active_ = sp, start_positioning(sp, now);
+    if (!active_) {
+      active_ = sp;
+      return start_positioning(sp, now);
+    }
+    next_ = sp;  // carried out when the running one is done...
+    if (cw & cw_pp::kChangeOnSetPoint) run_on_to_next(now);  // ...or on from its target
     return;
   }
   // Change set immediately: the new target replaces the running one. On the way and far
@@ -77,8 +81,44 @@ void Drive::start_positioning(const SetPoint& sp, Tick now) {
     return;
   }
   grid_ = motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
-  if (!core_.start(*this, ramp(parameters_.profile_velocity), sign(distance), std::llabs(distance), now))
-    active_.reset();
+  if (!core_.start(*this, ramp(sp.velocity), sign(distance), std::llabs(distance), now)) active_.reset();
+}
+
+// ---- change on set-point ----------------------------------------------------------------
+//
+// CiA 402-2, profile position, controlword bits 4, 5 and 9: with bit 9 = 1 and bit 5 = 0
+// "positioning with the current profile velocity up to the current set-point shall be
+// proceeded and then next positioning shall be applied": the axis does not stop at the
+// first target; it reaches it at the first set-point's velocity and goes on from there at
+// the next one's (6083h/6084h of the running motion, its ramp down to the last target).
+// The drive can do that while the next target lies beyond the first in the direction of
+// travel and the motion still goes to the first; otherwise (a reversal, a stop under way)
+// it stops at the first target and starts the next from there, as with bit 9 = 0.
+
+int64_t Drive::level_of(uint32_t velocity) const {
+  return std::clamp<int64_t>(velocity, 1, std::max<uint32_t>(parameters_.max_velocity, 1)) * grid_;
+}
+
+void Drive::run_on_to_next(Tick now) {
+  const motion::StepGenerator& g = core_.generator();
+  if (!g.moving() || g.stopping() || restart_after_stop_ || !g.remaining()) return;
+  const int64_t to_first = (active_->target - core_.position()) * g.direction();
+  const int64_t beyond = (next_->target - active_->target) * g.direction();
+  if (to_first <= 0 || beyond <= 0) return;
+  next_->through = true;
+  core_.retarget(now, to_first + beyond, g.ramp());
+  // Already ramping down to the first target: up again to its velocity.
+  if (g.phase() == motion::MotionPhase::Decelerating || g.phase() == motion::MotionPhase::Creeping)
+    core_.change_velocity(now, level_of(active_->velocity));
+}
+
+void Drive::pass_first_target(Tick at) {
+  // On the first target: the next set-point is the running one from here, at its velocity,
+  // and the buffer is free again (bit 12 follows bit 4).
+  active_ = next_;
+  active_->through = false;
+  next_.reset();
+  core_.change_velocity(at, level_of(active_->velocity));
 }
 
 }  // namespace stepnode::cia402
