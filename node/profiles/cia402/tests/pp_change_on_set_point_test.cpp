@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "node/profiles/cia402/tests/drive_harness.hpp"
 
@@ -130,6 +131,41 @@ TEST_F(ChangeOnSetPoint, ChangeSetImmediatelyWins) {
   for (const sim::TracedStep& s : motor.steps) highest = std::max(highest, at += s.direction);
   EXPECT_EQ(motor.position(), 400);
   EXPECT_LE(highest, 400);  // the first target was never gone to
+}
+
+// A fresh axis at a horizon, playing a change-on-set-point pair: the pulses the machine got.
+struct HorizonAxis : DriveAxis {
+  void TestBody() override {}
+  std::vector<sim::TracedStep> play(Tick horizon) {
+    std::vector<sim::TracedStep> train;  // as the machine receives them, queued or not
+    motor.trace_into(&train);
+    motor.set_horizon(horizon);
+    enable();
+    drive.parameters().acceleration = drive.parameters().deceleration = 10'000;
+    drive.parameters().profile_velocity = 1000;
+    drive.set_target_position(1000);
+    cw(kNewSetPoint);
+    cw(kEnabled);
+    run(ms(300));
+    drive.parameters().profile_velocity = 2000;
+    drive.set_target_position(3000);
+    cw(kNewSetPoint | kChangeOnSetPoint);
+    cw(kEnabled | kChangeOnSetPoint);
+    run(ms(3000));
+    motor.trace_into(nullptr);
+    EXPECT_EQ(motor.position(), 3000) << "horizon " << horizon;
+    return train;
+  }
+};
+
+// The core queues steps up to the port's horizon ahead of their time; the run-through
+// changes the course from a step's rule (the velocity at the first target), so the queued
+// steps are taken back and planned again: the train is the same at any horizon.
+TEST(ChangeOnSetPointHorizon, TheStepsAreTheSameAtAnyHorizon) {
+  const std::vector<sim::TracedStep> at_0 = HorizonAxis{}.play(0);
+  ASSERT_EQ(at_0.size(), 3000u);
+  EXPECT_EQ(HorizonAxis{}.play(ms(1)), at_0);
+  EXPECT_EQ(HorizonAxis{}.play(ms(100)), at_0);
 }
 
 }  // namespace
