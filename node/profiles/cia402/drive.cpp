@@ -166,7 +166,8 @@ void Drive::after_step(const motion::Step& step) {
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
   const bool limit = step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
   if (!limit) {
-    if (next_ && next_->through && core_.position() == active_->target) pass_first_target(step.time);
+    // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
+    if (next_ && next_->through && active_ && core_.position() == active_->target) pass_first_target(step.time);
     return;
   }
   core_.halt(*this, step.time);
