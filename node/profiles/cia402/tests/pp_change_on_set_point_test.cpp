@@ -78,6 +78,22 @@ TEST_F(ChangeOnSetPoint, TheAxisRunsThroughTheFirstTargetAtItsVelocityThenAtTheN
   EXPECT_NEAR(seconds(motor.steps.back().time), through_time(1000, 1000, 3000, 2000, kAccel), 0.002);
 }
 
+TEST_F(ChangeOnSetPoint, SetPointsChainWhileTheBufferFreesAtEachTarget) {
+  // The master sends the next set-point whenever bit 12 drops (the buffer has room): three
+  // targets, one motion, no stop before the last.
+  set_point(1000, 1000);
+  set_point(2000, 1000, kChangeOnSetPoint);
+  for (int i = 0; i < 3000 && (drive.statusword() & kBit12); ++i) run(ms(1));
+  EXPECT_GE(motor.position(), 1000);
+  EXPECT_LT(motor.position(), 1010);  // freed at the first target
+  set_point(3000, 1000, kChangeOnSetPoint);
+  run(ms(3000));
+  EXPECT_EQ(motor.position(), 3000);
+  EXPECT_GE(slowest_between(100, 2900), 999);
+  // One trapezoid over 3000 steps: 0.1 s and 50 steps up, 2900 steps at 1000, 0.1 s down.
+  EXPECT_NEAR(seconds(motor.steps.back().time), 0.1 + (3000 - 100) / 1000.0 + 0.1, 0.002);
+}
+
 TEST_F(ChangeOnSetPoint, ALowerNextVelocityIsTakenFromTheFirstTargetOn) {
   set_point(1000, 2000);
   set_point(3000, 500, kChangeOnSetPoint);
