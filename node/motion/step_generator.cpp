@@ -106,6 +106,10 @@ void StepGenerator::end_interval() {
     level_ = decel_floor_;
     phase_ = MotionPhase::Running;
     marks_.decel_end = t_;
+    if (distance_) {
+      holding_ = false;  // a move to a target ramps down to it from the lower velocity
+      plan_decel();
+    }
     reached_velocity();
     return;
   }
@@ -246,12 +250,16 @@ namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   peeked_ = kUnpeeked;  // the next step may move
-  if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
+  if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
   advance_to(at);
-  then_ = std::move(then);
   // Never below one level: at level 0 the motion would stand still for ever and the next
   // step's time divides by the level (a 0 Hz minimum makes base_level 0).
   level = std::max({level, ramp_.base_level, int64_t{1}});
+  // Already ramping down to the target: a lower velocity leaves that ramp as it is (slowing
+  // to it first at the same deceleration ends at the same place and time); a higher one
+  // ramps up again.
+  if (distance_ && phase_ == MotionPhase::Decelerating && !holding_ && level <= level_) return;
+  then_ = std::move(then);
   if (level > level_) {
     // Intervals at level+1 .. target, Z_A each (the same convention as a start).
     peak_level_ = level;
@@ -269,6 +277,7 @@ void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSp
     interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
   } else {
     phase_ = MotionPhase::Running;  // already there: hold it
+    plan_decel();
     reached_velocity();
   }
 }

@@ -40,6 +40,10 @@ class StepGenerator {
   // With `then`, the motion moves to that ramp's grid at its run level once `level` is
   // reached (regrid): a rate the current grid cannot hold to 0.01 % is approached on the
   // current grid, then held exactly on one made for it.
+  // A move to a target keeps it: the new velocity is held until the ramp down to the
+  // target; a move already in that ramp keeps it unless the velocity is higher (CiA 402
+  // change on set-point: the next set-point's velocity from the first target on); `then`
+  // is for motions without a destination only.
   void change_velocity(Tick at, int64_t level, std::optional<RampSpec> then = std::nullopt);
   // From time `at`, carries a motion without a destination over to `ramp`'s level grid:
   // the velocity to the nearest level of the new grid (at least 1), the phase accumulator

@@ -1,3 +1,6 @@
+// The drive as a front end of the motion core: power-up, the master's writes, the state
+// machine's stops and the core's events; the modes are drive_pp.cpp, drive_pv.cpp,
+// drive_homing.cpp and drive_cyclic.cpp, what the master reads drive_status.cpp.
 #include "node/profiles/cia402/drive.hpp"
 
 #include <algorithm>
@@ -12,8 +15,6 @@ using motion::Tick;
 // Error codes (603Fh, CiA 301 / CiA 402-2 error code table).
 constexpr uint16_t kReferenceLimit = 0x8612;  // a limit switch was reached
 constexpr uint16_t kExternalError = 0x9000;   // the e-stop input
-
-int sign(int64_t v) { return v < 0 ? -1 : +1; }
 
 }  // namespace
 
@@ -140,15 +141,6 @@ void Drive::set_mode(Mode mode, Tick now) {
   notify();
 }
 
-void Drive::set_target_velocity(int32_t steps_per_s, Tick now) {
-  target_velocity_ = steps_per_s;
-  if (mode_display_ != Mode::ProfileVelocity || mode_ != mode_display_ || !machine_.operation_enabled() || halted_)
-    return;
-  core_.advance_to(now);
-  velocity_to(steps_per_s, now);
-  notify();
-}
-
 void Drive::halt(bool on, Tick now) {
   halted_ = on;
   if (!on || !core_.owned_by(*this)) return;
@@ -167,104 +159,17 @@ void Drive::halt(bool on, Tick now) {
   }
 }
 
-// ---- profile position -----------------------------------------------------------------
-
-int64_t Drive::clamp_to_limits(int64_t target) {
-  // 607Dh: a target outside the software limits goes to the limit; bit 11 shows it.
-  const int64_t low = parameters_.min_position_limit, high = parameters_.max_position_limit;
-  internal_limit_ = low < high && (target < low || target > high);
-  if (low < high) target = std::clamp(target, low, high);
-  return std::clamp<int64_t>(target, INT32_MIN, INT32_MAX);
-}
-
-void Drive::new_set_point(uint16_t cw, Tick now) {
-  // The set-point is taken only when the trajectory generator can take it: no other front
-  // end's job on the axis, and room in the buffer (one running, one next).
-  if (core_.busy() && !core_.owned_by(*this)) return;
-  const bool immediately = (cw & cw_pp::kChangeSetImmediately) != 0;
-  if (active_ && next_ && !immediately) return;  // bit 12 stays 1: the buffer is full
-  // Bit 6: relative to the preceding target position (60F2h's default), or to where the
-  // trajectory is when there was none.
-  const int64_t base = (cw & cw_pp::kRelative) ? last_target_.value_or(position_demand()) : 0;
-  SetPoint sp{clamp_to_limits(base + target_position_)};
-  last_target_ = sp.target;
-  acknowledged_ = true;
-  target_reached_ = false;
-  in_window_since_.reset();
-  if (!core_.owned_by(*this)) {
-    active_ = sp;
-    next_.reset();
-    return start_positioning(sp, now);
-  }
-  if (!immediately) {
-    if (active_) next_ = sp;  // carried out when the running one is done
-    else active_ = sp, start_positioning(sp, now);
-    return;
-  }
-  // Change set immediately: the new target replaces the running one. On the way and far
-  // enough to ramp down: the end point moves; otherwise stop, then go there.
-  active_ = sp;
-  next_.reset();
-  const motion::StepGenerator& g = core_.generator();
-  const int64_t ahead = (sp.target - core_.position()) * g.direction();
-  const int64_t to_stop = static_cast<int64_t>(g.ramp().decel_phase(g.level()) / g.ramp().phase_per_step) + 2;
-  if (!g.stopping() && g.remaining() && ahead >= to_stop) {
-    core_.retarget(now, ahead, g.ramp());
-  } else {
-    restart_after_stop_ = true;
-    core_.stop(now);
-  }
-}
-
-motion::RampSpec Drive::ramp(uint32_t velocity) const {
-  const int64_t v = std::clamp<int64_t>(velocity, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
-  const int64_t acc = std::max<uint32_t>(parameters_.acceleration, 1);
-  const int64_t dec = std::max<uint32_t>(parameters_.deceleration, 1);
-  return motion::profile_ramp(v, acc, dec, grid_);
-}
-
-void Drive::start_positioning(const SetPoint& sp, Tick now) {
-  const int64_t distance = sp.target - core_.position();
-  if (distance == 0) {
-    active_.reset();
-    in_window_since_ = now;  // already there
-    return;
-  }
-  grid_ = motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
-  if (!core_.start(*this, ramp(parameters_.profile_velocity), sign(distance), std::llabs(distance), now))
-    active_.reset();
-}
-
-// ---- profile velocity -----------------------------------------------------------------
-
-void Drive::velocity_to(int64_t target, Tick now) {
-  target = std::clamp<int64_t>(target, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
-  if (!core_.owned_by(*this)) {
-    if (target == 0 || core_.busy()) return;
-    grid_ = motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
-    core_.start(*this, ramp(static_cast<uint32_t>(std::llabs(target))), sign(target), std::nullopt, now);
-    return;
-  }
-  const motion::StepGenerator& g = core_.generator();
-  if (target == 0) {
-    velocity_after_stop_.reset();
-    return core_.stop(now);
-  }
-  if (sign(target) != g.direction() || g.stopping()) {
-    // A reversal (or a stop already under way): stop, then start at the new velocity.
-    velocity_after_stop_ = target;
-    return core_.stop(now);
-  }
-  core_.change_velocity(now, std::llabs(target) * grid_);
-}
-
 // ---- the core's events ----------------------------------------------------------------
 
 void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
   const bool limit = step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
-  if (!limit) return;
+  if (!limit) {
+    // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
+    if (next_ && next_->through && active_ && core_.position() == active_->target) pass_first_target(step.time);
+    return;
+  }
   core_.halt(*this, step.time);
   active_.reset();
   next_.reset();
@@ -356,139 +261,6 @@ void Drive::advanced(Tick now) {
   else if (in_window_since_) target_reached_ = now - *in_window_since_ >= window;
   else target_reached_ = true;  // no set-point since power-up: standing where it is
   notify();
-}
-
-// ---- what the master reads ----------------------------------------------------------
-
-int32_t Drive::velocity_actual() const {
-  const motion::StepGenerator& g = core_.generator();
-  return static_cast<int32_t>(std::lround(g.velocity() * g.direction()));
-}
-
-uint32_t Drive::digital_inputs() const {
-  const motion::InputLevels& m = core_.inputs();
-  return (m.lower_limit() ? 1u : 0u) | (m.upper_limit() ? 2u : 0u) | (m.home() ? 4u : 0u);
-}
-
-uint16_t Drive::statusword() const {
-  uint16_t s = machine_.statusword();
-  if (internal_limit_) s |= sw::kInternalLimitActive;
-  switch (mode_display_) {
-    case Mode::ProfilePosition:
-      if (target_reached_) s |= sw::kTargetReached;
-      if (acknowledged_ || (active_ && next_)) s |= sw_mode::kSetPointAcknowledge;
-      break;
-    case Mode::ProfileVelocity: {
-      const motion::StepGenerator& g = core_.generator();
-      const bool moving = core_.moving();
-      const int64_t want = std::llabs(int64_t{target_velocity_});
-      // Velocity reached: running at the target (its level), or stopped for a 0 target.
-      const bool reached = halted_ ? !moving
-                                   : (want == 0 ? !moving
-                                                : moving && core_.owned_by(*this) &&
-                                                      g.level() == want * grid_ &&
-                                                      g.phase() != motion::MotionPhase::Accelerating &&
-                                                      g.phase() != motion::MotionPhase::Decelerating);
-      if (reached) s |= sw::kTargetReached;
-      if (!moving) s |= sw_mode::kSpeedZero;
-      break;
-    }
-    case Mode::Homing:
-      // CiA 402-2 homing status: 13/12/10 = 0/0/1 not started or interrupted, 0/0/0 in
-      // progress, 0/1/1 completed, 1/0/x error (bit 10: the velocity is 0).
-      switch (homing_) {
-        case Homing::Idle: s |= core_.owned_by(*this) ? 0 : sw::kTargetReached; break;
-        case Homing::InProgress: break;
-        case Homing::Attained: s |= sw_mode::kHomingAttained | sw::kTargetReached; break;
-        case Homing::Error: s |= sw_mode::kHomingError | (core_.moving() ? 0 : sw::kTargetReached); break;
-      }
-      break;
-    case Mode::CyclicSyncPosition:
-    case Mode::CyclicSyncVelocity: {
-      // Bit 12: the drive follows the command value (enabled, not halted, no other front
-      // end's job); bit 13 (CSP): following error.
-      const bool follows = machine_.operation_enabled() && !halted_ && (!core_.busy() || core_.owned_by(*this));
-      if (follows) s |= sw_mode::kDriveFollows;
-      if (following_error_ && mode_display_ == Mode::CyclicSyncPosition) s |= sw_mode::kFollowingError;
-      break;
-    }
-    case Mode::InterpolatedPosition:
-      if (machine_.operation_enabled() && (controlword_ & kEnableIp)) s |= sw_mode::kIpModeActive;
-      if (!core_.owned_by(*this) && core_.position() == seg_to_) s |= sw::kTargetReached;
-      if (following_error_) s |= sw_mode::kFollowingError;
-      break;
-    default: break;
-  }
-  return s;
-}
-
-// ---- homing ---------------------------------------------------------------------------
-
-HomingInputs Drive::homing_inputs() const {
-  const motion::InputLevels& m = core_.inputs();
-  return HomingInputs{m.lower_limit(), m.upper_limit(), m.home(), m.marker()};
-}
-
-void Drive::start_homing(Tick now) {
-  if (core_.busy()) return;  // another front end's job, or still stopping
-  auto plan = homing_plan(parameters_.homing_method, core_.inputs().home());
-  if (!plan) {
-    homing_ = Homing::Error;  // 6098h names no method this drive performs
-    return;
-  }
-  searches_ = std::move(*plan);
-  search_ = 0;
-  search_stopping_ = false;
-  homing_ = Homing::InProgress;
-  if (searches_.empty()) return homing_done(true, now);  // 35, 37: here
-  run_search(now);
-}
-
-void Drive::run_search(Tick now) {
-  if (search_ >= searches_.size()) return homing_done(false, now);
-  const HomingSearch& s = searches_[search_];
-  const uint32_t speed = s.fast ? parameters_.homing_switch_speed : parameters_.homing_zero_speed;
-  const int64_t v = std::clamp<int64_t>(speed, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
-  const int64_t acc = std::max<uint32_t>(parameters_.homing_acceleration, 1);
-  grid_ = motion::profile_levels_per_hz(acc);
-  last_inputs_ = homing_inputs();
-  if (!core_.start(*this, motion::profile_ramp(v, acc, acc, grid_), s.direction, std::nullopt, now))
-    homing_ = Homing::Idle;
-}
-
-void Drive::homing_step(const motion::Step& step) {
-  const HomingInputs in = homing_inputs();
-  const HomingInputs before = last_inputs_;
-  last_inputs_ = in;
-  if (search_stopping_) return;  // ramping down after an edge: the next search looks again
-  const HomingSearch& s = searches_[search_];
-  if (happened(s.until, before, in)) {
-    switch (s.then) {
-      case HomingSearch::Then::Stop:
-        search_stopping_ = true;
-        return core_.stop(step.time);
-      case HomingSearch::Then::Continue:
-        ++search_;
-        return;
-      case HomingSearch::Then::Home:
-        core_.halt(*this, step.time);
-        return homing_done(true, step.time);
-    }
-  }
-  // A limit switch the search does not look for: the method cannot be performed here.
-  const bool limit = step.direction < 0 ? in.negative_limit : in.positive_limit;
-  const bool wanted = s.until == (step.direction < 0 ? HomingEvent::NegativeLimitOn : HomingEvent::PositiveLimitOn);
-  if (limit && !wanted) {
-    core_.halt(*this, step.time);
-    homing_done(false, step.time);
-  }
-}
-
-void Drive::homing_done(bool ok, Tick now) {
-  (void)now;
-  homing_ = ok ? Homing::Attained : Homing::Error;
-  // The home position is the home offset (607Ch): position actual reads it there.
-  if (ok) core_.set_position(parameters_.home_offset);
 }
 
 void Drive::notify() {

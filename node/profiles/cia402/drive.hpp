@@ -134,12 +134,19 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
 
  private:
   struct SetPoint {
-    int64_t target = 0;  // absolute, steps, inside the software limits
+    int64_t target = 0;     // absolute, steps, inside the software limits
+    uint32_t velocity = 0;  // 6081h when it was taken (bit 12)
+    // Change on set-point (bit 9 with bit 5 = 0): the motion to the running set-point's
+    // target runs on through it to this one.
+    bool through = false;
   };
   void carry_out(Stop stop, motion::Tick now);
   void stopped(motion::Tick now);
   void new_set_point(uint16_t cw, motion::Tick now);
   void start_positioning(const SetPoint& sp, motion::Tick now);
+  void run_on_to_next(motion::Tick now);
+  void pass_first_target(motion::Tick at);
+  int64_t level_of(uint32_t velocity) const;
   void velocity_to(int64_t target, motion::Tick now);
   void halt(bool on, motion::Tick now);
   void start_homing(motion::Tick now);

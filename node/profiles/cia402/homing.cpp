@@ -40,6 +40,52 @@ std::vector<HomingSearch> home_switch_plan(int active_side, int index_side, bool
   return plan;
 }
 
+// Methods 7..14 and 23..30: a home switch active over a part of the travel only (CiA 402-2:
+// "in effect the switch has a momentary action as the axle's position sweeps past it").
+// The home position is on one of its two edges (`upper`: the edge toward positive
+// positions), crossed last in `final_direction` at the slow speed, and for 7..14 the first
+// index pulse beyond it in that direction. The first search runs in `initial_direction`
+// (7..10 positive, 11..14 negative) until the switch comes on, reversing once at the limit
+// switch if that direction leads away from it; it stops inside the switch (wider than the
+// stopping distance). On the switch at the start, the drive goes for the edge at once.
+std::vector<HomingSearch> home_window_plan(int initial_direction, bool upper, int final_direction, bool with_index,
+                                           bool home_active) {
+  std::vector<HomingSearch> plan;
+  if (!home_active) {
+    HomingSearch find{initial_direction, kFast, E::HomeOn, Then::Stop};
+    find.reverse_at_limit = true;
+    plan.push_back(find);
+  }
+  // From inside the switch: the edge is left in `final_direction` when that direction
+  // points out through it (upper edge and positive, lower edge and negative); otherwise the
+  // drive leaves through the edge the other way, then comes back across it.
+  const Then at_edge = with_index ? Then::Continue : Then::Home;
+  const int outward = upper ? kPos : kNeg;
+  if (final_direction == outward) {
+    plan.push_back({final_direction, kSlow, E::HomeOff, at_edge});
+  } else {
+    plan.push_back({outward, home_active ? kFast : kSlow, E::HomeOff, Then::Stop});
+    plan.push_back({final_direction, kSlow, E::HomeOn, at_edge});
+  }
+  if (with_index) plan.push_back({final_direction, kSlow, E::IndexOn, Then::Home});
+  return plan;
+}
+
+// One of 7..14: its initial direction, edge and final direction, as listed in homing_plan.
+std::vector<HomingSearch> window_method(int8_t method, bool with_index, bool home_active) {
+  struct Row {
+    int initial;
+    bool upper;
+    int final_direction;
+  };
+  static constexpr Row kRows[] = {
+      {kPos, false, kNeg}, {kPos, false, kPos}, {kPos, true, kNeg}, {kPos, true, kPos},   // 7..10
+      {kNeg, true, kPos},  {kNeg, true, kNeg},  {kNeg, false, kPos}, {kNeg, false, kNeg},  // 11..14
+  };
+  const Row& r = kRows[method - 7];
+  return home_window_plan(r.initial, r.upper, r.final_direction, with_index, home_active);
+}
+
 }  // namespace
 
 bool happened(HomingEvent event, const HomingInputs& b, const HomingInputs& a) {
@@ -78,6 +124,28 @@ std::optional<std::vector<HomingSearch>> homing_plan(int8_t method, bool home_ac
     case 20: return home_switch_plan(kPos, kPos, false, home_active);
     case 21: return home_switch_plan(kNeg, kPos, false, home_active);
     case 22: return home_switch_plan(kNeg, kNeg, false, home_active);
+    // Home switch between the limit switches (CiA 402-2 figures "homing on the home switch
+    // and index pulse, positive / negative initial move"): 7..10 start positive, 11..14
+    // negative; the home position by the lower edge (7: below it, 8: above it) or the
+    // upper edge (9: below, 10: above), 11..14 the same edges from the other side (11:
+    // above the upper, 12: below the upper, 13: above the lower, 14: below the lower).
+    // 23..30 are 7..14 with the edge itself as the home position.
+    case 7:
+    case 8:
+    case 9:
+    case 10:
+    case 11:
+    case 12:
+    case 13:
+    case 14: return window_method(method, true, home_active);
+    case 23:
+    case 24:
+    case 25:
+    case 26:
+    case 27:
+    case 28:
+    case 29:
+    case 30: return window_method(static_cast<int8_t>(method - 16), false, home_active);
     case 33: return std::vector<HomingSearch>{{kNeg, kSlow, E::IndexOn, Then::Home}};
     case 34: return std::vector<HomingSearch>{{kPos, kSlow, E::IndexOn, Then::Home}};
     case 35:

@@ -42,14 +42,20 @@ struct HomingSearch {
   bool fast = true;     // 6099h:1 "speed during search for switch", else :2 "for zero"
   HomingEvent until = HomingEvent::HomeOn;
   Then then = Then::Home;
+  // The limit switch in the direction of travel, reached before `until`, reverses the
+  // search once (ramp down, then the same search the other way): methods 7..14 and 23..30,
+  // whose first search may lead away from the home switch. Otherwise it ends the homing
+  // with an error.
+  bool reverse_at_limit = false;
 };
 
 // The searches of `method` for a drive whose home switch is `home_active` at the start
 // (methods 3..6 and 19..22 begin differently on either side of the switch). Empty: the
 // current position is the home position (35, 37). Nullopt: a method not performed: this
 // drive performs 1, 2 (limit switch and index pulse), 3..6 (home switch and index pulse),
-// 17, 18 (limit switch), 19..22 (home switch), 33, 34 (index pulse), 35 and 37; 7..14 and
-// 23..30 (a home switch between the limit switches, reversing at them) are not yet.
+// 7..14 (a home switch between the limit switches, reversing at them, and the index pulse),
+// 17, 18 (limit switch), 19..22 (home switch), 23..30 (as 7..14 without the index pulse),
+// 33, 34 (index pulse), 35 and 37.
 std::optional<std::vector<HomingSearch>> homing_plan(int8_t method, bool home_active);
 
 }  // namespace stepnode::cia402

@@ -10,39 +10,17 @@
 #include <random>
 #include <vector>
 
-#include "node/profiles/cia402/drive.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/profiles/cia402/tests/drive_harness.hpp"
 
 namespace stepnode::cia402 {
 namespace {
 
-using motion::kClockHz;
-using motion::Tick;
-
-struct Recording : sim::AxisMachine {
-  std::vector<std::pair<Tick, int>> steps;
-  void step(Tick time, int direction) override {
-    steps.push_back({time, direction});
-    sim::AxisMachine::step(time, direction);
-  }
-};
-
-class Cyclic : public ::testing::Test {
+class Cyclic : public DriveAxis {
  protected:
-  Recording motor;
-  sim::EStopSwitch estop{{&motor}};
-  motion::AxisCore core{{&motor}};
-  Drive drive{core};
-  Tick now = 0;
-
   void enable(Mode m) {
     drive.parameters().max_velocity = 1'000'000;
     drive.set_mode(m, now);
-    drive.controlword(0x06, now);
-    drive.controlword(0x07, now);
-    drive.controlword(0x0F, now);
-    ASSERT_EQ(drive.statusword() & 0x6F, 0x27);
+    DriveAxis::enable();
   }
   // A SYNC at `t` carrying `target` (CSP): the RPDO is applied, then the SYNC acts.
   void sync_to(Tick t, int32_t target) {
@@ -63,7 +41,7 @@ std::vector<int32_t> master_trajectory() {
 
 // Every step against the ideal: the step to position x falls when the interpolated
 // trajectory (from the position at SYNC k to set-point k over one cycle) reaches x.
-void expect_on_trajectory(const std::vector<std::pair<Tick, int>>& steps, const std::vector<int32_t>& targets,
+void expect_on_trajectory(const std::vector<sim::TracedStep>& steps, const std::vector<int32_t>& targets,
                           Tick cycle, Tick first) {
   size_t s = 0;
   int64_t pos = 0;
@@ -74,8 +52,8 @@ void expect_on_trajectory(const std::vector<std::pair<Tick, int>>& steps, const 
     for (int64_t i = 1; i <= n; ++i, ++s) {
       ASSERT_LT(s, steps.size());
       const double ideal = static_cast<double>(start) + static_cast<double>(i) * static_cast<double>(cycle) / n;
-      worst = std::max<Tick>(worst, std::llabs(steps[s].first - static_cast<Tick>(std::llround(ideal))));
-      pos += steps[s].second;
+      worst = std::max<Tick>(worst, std::llabs(steps[s].time - static_cast<Tick>(std::llround(ideal))));
+      pos += steps[s].direction;
     }
     ASSERT_EQ(pos, targets[k]) << "after cycle " << k;
   }
@@ -125,7 +103,7 @@ TEST_F(Cyclic, SyncJitterNeitherLosesNorJumps) {
   EXPECT_EQ(motor.position(), targets.back());
   // No step closer than a quarter of the fastest rate's interval (no catching up in a burst).
   for (size_t i = 1; i < motor.steps.size(); ++i)
-    EXPECT_GE(motor.steps[i].first - motor.steps[i - 1].first, cycle / 5 / 4) << i;
+    EXPECT_GE(motor.steps[i].time - motor.steps[i - 1].time, cycle / 5 / 4) << i;
 }
 
 TEST_F(Cyclic, AMissedSyncHoldsTheLastSetPoint) {
@@ -154,7 +132,7 @@ TEST_F(Cyclic, ASyncBurstIsNotTheCycleAndANewPeriodIsTaken) {
   EXPECT_EQ(drive.position_actual(), 2000);
   // At the steady period each segment is spread over the whole cycle: 20 steps in 10 ms.
   const size_t n = motor.steps.size();
-  EXPECT_NEAR(static_cast<double>(motor.steps[n - 1].first - motor.steps[n - 20].first), 19.0 * cycle / 20, cycle / 20);
+  EXPECT_NEAR(static_cast<double>(motor.steps[n - 1].time - motor.steps[n - 20].time), 19.0 * cycle / 20, cycle / 20);
 }
 
 TEST_F(Cyclic, CsvChangesTheVelocityAtEachSyncWithoutLosingAStep) {

@@ -2,59 +2,18 @@
 // sends (CiA 402-2 "device control": 06h shutdown, 07h switch on, 0Fh enable operation,
 // 0Bh quick stop, 00h disable voltage) and the profile position / profile velocity modes'
 // bits (6040h bits 4, 5, 6, 8; 6041h bits 10, 11, 12), with the step times the engine makes.
-#include "node/profiles/cia402/drive.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/profiles/cia402/tests/drive_harness.hpp"
 
 namespace stepnode::cia402 {
 namespace {
 
-using motion::kClockHz;
-using motion::Tick;
-
-constexpr Tick ms(int64_t n) { return n * kClockHz / 1000; }
-
-// The statusword's state bits (6041h state coding, mask 0x6F).
-constexpr uint16_t kStateMask = 0x006F;
-constexpr uint16_t kSwitchOnDisabled = 0x0040, kReadyToSwitchOn = 0x0021, kSwitchedOn = 0x0023,
-                   kOperationEnabled = 0x0027, kQuickStopActive = 0x0007, kFault = 0x0008;
-constexpr uint16_t kTargetReached = 1u << 10, kInternalLimit = 1u << 11, kBit12 = 1u << 12;
-
-struct Recording : sim::AxisMachine {
-  using sim::AxisMachine::AxisMachine;
-  std::vector<Tick> times;
-  void step(Tick time, int direction) override {
-    times.push_back(time);
-    sim::AxisMachine::step(time, direction);
-  }
-};
-
-class DriveTest : public ::testing::Test {
+class DriveTest : public DriveAxis {
  protected:
-  Recording motor;
-  sim::EStopSwitch estop{{&motor}};
-  motion::AxisCore core{{&motor}};
-  Drive drive{core};
-  Tick now = 0;
-
-  uint16_t state() const { return drive.statusword() & kStateMask; }
-  void cw(uint16_t value) { drive.controlword(value, now); }
-  void run(Tick dt) {
-    const Tick end = now + dt;
-    while (now < end) drive.advance(now = std::min(end, now + ms(1)));
-  }
-  void enable() {
-    cw(0x06);
-    cw(0x07);
-    cw(0x0F);
-    ASSERT_EQ(state(), kOperationEnabled);
-  }
   void set_profile(uint32_t v, uint32_t acc, uint32_t dec) {
     drive.parameters().profile_velocity = v;
     drive.parameters().acceleration = acc;
@@ -98,13 +57,13 @@ TEST_F(DriveTest, ProfilePositionRunsTheTrapezoidWithTheSetPointHandshake) {
   EXPECT_EQ(motor.position(), 1000);
   EXPECT_EQ(drive.position_actual(), 1000);
   EXPECT_TRUE(drive.statusword() & kTargetReached);
-  ASSERT_EQ(motor.times.size(), 1000u);
-  const double last = static_cast<double>(motor.times.back()) / kClockHz;
+  ASSERT_EQ(motor.steps.size(), 1000u);
+  const double last = static_cast<double>(motor.steps.back().time) / kClockHz;
   EXPECT_NEAR(last, 1.1, 0.005);
   // Cruise: 1 ms between steps, exactly (1000 steps/s on the 4.9152 MHz timebase).
-  EXPECT_EQ(motor.times[500] - motor.times[499], kClockHz / 1000);
+  EXPECT_EQ(motor.steps[500].time - motor.steps[499].time, kClockHz / 1000);
   // The first step of a ramp from standstill: at sqrt(2/a) = 14.1 ms.
-  EXPECT_NEAR(static_cast<double>(motor.times[0]) / kClockHz, std::sqrt(2.0 / 10'000), 0.001);
+  EXPECT_NEAR(static_cast<double>(motor.steps[0].time) / kClockHz, std::sqrt(2.0 / 10'000), 0.001);
 }
 
 TEST_F(DriveTest, RelativeSetPointsAddToThePrecedingTarget) {
@@ -153,7 +112,7 @@ TEST_F(DriveTest, ChangeSetImmediatelyMovesTheEndPointWithoutStopping) {
   run(ms(2500));
   EXPECT_EQ(motor.position(), 1500);
   // No stop at 400: the step interval there is the cruise interval.
-  EXPECT_EQ(motor.times[400] - motor.times[399], kClockHz / 1000);
+  EXPECT_EQ(motor.steps[400].time - motor.steps[399].time, kClockHz / 1000);
 }
 
 TEST_F(DriveTest, ChangeSetImmediatelyBackwardsStopsThenGoesThere) {
