@@ -80,8 +80,8 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                         }}),
       sync_(
           dictionary_, [this](const od::CanFrame& f) { send(f); },
-          [this](uint8_t counter, uint64_t now) {
-            pdo_.on_sync(counter, now);
+          [this](uint8_t counter, uint64_t sync_us, uint64_t now) {
+            pdo_.on_sync(counter, sync_us, now);
             if (app_) app_->sync(now);
           },
           [this](uint8_t dlc, uint64_t now) {
@@ -269,7 +269,7 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
   }
 }
 
-void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   if (app_ && booted_) app_->advance(now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
@@ -291,12 +291,12 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
   consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
-  if (sync_.on_frame(frame, now_us)) {
+  if (sync_.on_frame(frame, now_us, arrival_us)) {
     // handled
   } else if (sdo_.on_frame(frame, now_us)) {
     // handled by the SDO server channel it was addressed to
   } else if (state_ == NmtState::Operational) {
-    pdo_.on_frame(frame, now_us);
+    pdo_.on_frame(frame, now_us, arrival_us);
   }
   // A received frame may change mapped values: event-driven TPDOs go out now, not on the
   // next tick.

@@ -50,7 +50,9 @@ class CanopenNode {
   // Power-on: load stored parameters, send boot-up, enter pre-operational. Without a
   // node-ID: nothing but the LSS slave, until a master gives it one (CiA 305).
   void start(uint64_t now_us);
-  void on_frame(const od::CanFrame& frame, uint64_t now_us);
+  // `arrival_us`: when the frame reached the interface (kernel timestamp; 0 unknown): the
+  // synchronous window 0x1007 is measured from a SYNC's arrival.
+  void on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   void on_tick(uint64_t now_us);
   void on_bus_event(BusEvent event, uint64_t now_us);
   // The socket's count of received frames it dropped (its queue was full), as reported

@@ -75,6 +75,9 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
     return SdoAbort::None;
   };
   od.var(0x1006, "Communication cycle period", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
+  // CiA 301 7.5.2.8: the window (us) after a SYNC in which synchronous PDOs are sent and
+  // accepted; 0 = not used.
+  od.var(kSyncWindowLength, "Synchronous window length", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
   Entry& overflow = od.var(0x1019, "Synchronous counter overflow value", DT::Unsigned8,
                            AC::ReadWrite, {0});
   // 0 = no counter, 2..240 = counter range; 1 and 241..255 are reserved. The value may

@@ -23,6 +23,7 @@ struct DeviceInfo {
 };
 
 constexpr unsigned kHeartbeatConsumers = 4;
+constexpr uint16_t kSyncWindowLength = 0x1007;  // us; 0: no window
 constexpr unsigned kErrorHistoryLength = 8;
 // 0x1029 error behaviour (CiA 301 7.5.2.32), sub 1: the communication error class.
 constexpr uint16_t kErrorBehaviour = 0x1029;
