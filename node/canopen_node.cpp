@@ -87,6 +87,7 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
           }),
+      time_(dictionary_, [this](const od::CanFrame& f) { send(f); }, options_.wall_clock),
       pdo_(dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); },
            emcy_),
       sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }),
@@ -201,9 +202,16 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   consumer_.reset();
   guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
   sync_.reset(now_us);
+  time_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
   send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
   enter(NmtState::PreOperational, now_us);
+  // A self-starting device (CiA 302-2, 0x1F80 bit 2 = 0) enters operational by itself after
+  // every boot-up, without an NMT master; NMT commands still move it after that.
+  if (!(dictionary_.get<uint32_t>(od::kNmtStartup, 0) & od::kNmtStartupNoAutoStart)) {
+    spdlog::info("NMT startup 0x1F80 bit 2 is 0: self-start");
+    enter(NmtState::Operational, now_us);
+  }
 }
 
 void CanopenNode::adopt_node_id(uint8_t id) {
@@ -291,7 +299,7 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
-  if (sync_.on_frame(frame, now_us, arrival_us)) {
+  if (sync_.on_frame(frame, now_us, arrival_us) || time_.on_frame(frame, now_us, arrival_us)) {
     // handled
   } else if (sdo_.on_frame(frame, now_us)) {
     // handled by the SDO server channel it was addressed to
@@ -312,6 +320,7 @@ void CanopenNode::on_tick(uint64_t now_us) {
   if (state_ == NmtState::Stopped) return;
   sdo_.on_tick(now_us);
   sync_.on_tick(now_us);
+  time_.on_tick(now_us);
   pdo_.on_tick(now_us);
   emcy_.on_tick(now_us);
 }

@@ -19,6 +19,7 @@
 #include "node/pdo_engine.hpp"
 #include "node/sdo_server_channels.hpp"
 #include "node/sync.hpp"
+#include "node/time_service.hpp"
 #include "od/can_frame.hpp"
 #include "node/device_objects.hpp"
 #include "od/communication_objects.hpp"
@@ -36,6 +37,9 @@ struct NodeOptions {
   DeviceLayout layout;  // the profiles and axes (the PDO count follows)
   std::filesystem::path state_dir = ".";
   uint64_t sdo_timeout_us = 1'000'000;
+  // The wall clock for a TIME producer (us since 1970, CLOCK_REALTIME in node/main.cpp);
+  // empty: a producer sends the network time it received (tests give virtual time).
+  TimeService::WallClock wall_clock;
 };
 
 // What the CAN controller reports (SocketCAN error frames), as the node sees it.
@@ -102,6 +106,7 @@ class CanopenNode {
   HeartbeatConsumer consumer_;
   NodeGuarding guarding_;  // 0x100C, 0x100D; only while 0x1017 is 0
   SyncService sync_;
+  TimeService time_;  // 0x1012, 0x2F12
   PdoEngine pdo_;
   SdoServerChannels sdo_;  // 0x1200..0x1203
   LssSlave lss_;

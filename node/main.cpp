@@ -47,8 +47,15 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
   return now - static_cast<uint64_t>(age_us);
 }
 
-int run(const node::NodeConfig& cfg) {
+uint64_t wall_clock_us() {
+  timespec real{};
+  clock_gettime(CLOCK_REALTIME, &real);
+  return static_cast<uint64_t>(real.tv_sec) * 1'000'000 + static_cast<uint64_t>(real.tv_nsec) / 1000;
+}
+
+int run(node::NodeConfig cfg) {
   canio::SocketCan can(cfg.iface);
+  cfg.options.wall_clock = wall_clock_us;  // a TIME producer sends this host's time
   node::Device device(cfg.options, cfg.object_defaults, [&can](const od::CanFrame& f) { can.send(f); });
 
   canio::EventLoop loop;

@@ -99,6 +99,35 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
   od.var(0x1015, "Inhibit time EMCY", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
 }
 
+void add_time(Dictionary& od) {
+  // CiA 301 7.5.2.14: bit 31 consumes TIME, bit 30 produces it, bit 29 = 29-bit CAN-ID (not
+  // supported here). The default: consumer on 0x100.
+  Entry& time = od.var(0x1012, "COB-ID time stamp object", DT::Unsigned32, AC::ReadWrite,
+                       encode<uint32_t>(kCobInvalid | cob::kTimeStamp));
+  time.validate = [&od](std::span<const uint8_t> d) {
+    const uint32_t current = od.get<uint32_t>(0x1012, 0), next = u32(d);
+    constexpr uint32_t kInUse = kCobInvalid | kCobGenerate;  // consumer, producer
+    if (next & (kCobExtended | kCobIdHighBits)) return SdoAbort::InvalidValue;
+    if (is_restricted_can_id(next & 0x7FF)) return SdoAbort::InvalidValue;
+    // The CAN-ID does not change while the TIME object is consumed or produced.
+    if ((next & 0x7FF) != (current & 0x7FF) && (current & kInUse) && (next & kInUse))
+      return SdoAbort::InvalidValue;
+    return SdoAbort::None;
+  };
+}
+
+void add_nmt_startup(Dictionary& od) {
+  // CiA 302-2 0x1F80 NMT startup. Bit 0: 1 = NMT master, which this device is not (refused).
+  // Bit 2: 0 = enter operational by itself after boot-up (a self-starting device), 1 = wait
+  // for NMT start. The other bits are NMT master functions, without effect here. The
+  // default waits for the master, as CiA 301 devices do.
+  Entry& startup = od.var(kNmtStartup, "NMT startup", DT::Unsigned32, AC::ReadWrite,
+                          encode<uint32_t>(kNmtStartupNoAutoStart));
+  startup.validate = [](std::span<const uint8_t> d) {
+    return u32(d) & kNmtStartupMaster ? SdoAbort::InvalidValue : SdoAbort::None;
+  };
+}
+
 void add_heartbeat(Dictionary& od) {
   Object& consumer = od.record(0x1016, "Consumer heartbeat time", ObjectCode::Array);
   for (unsigned i = 1; i <= kHeartbeatConsumers; ++i) {
@@ -244,7 +273,9 @@ void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigne
   add_identity(od, info);
   add_error_history(od);
   add_sync_and_emcy(od, info);
+  add_time(od);
   add_heartbeat(od);
+  add_nmt_startup(od);
   add_node_guarding(od);
   add_error_behaviour(od);
   add_store_restore(od);
