@@ -205,6 +205,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   time_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
   send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
+  conflict_.booted(node_id(), now_us);
   enter(NmtState::PreOperational, now_us);
   // A self-starting device (CiA 302-2, 0x1F80 bit 2 = 0) enters operational by itself after
   // every boot-up, without an NMT master; NMT commands still move it after that.
@@ -277,6 +278,28 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
   }
 }
 
+void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us) {
+  // Manufacturer bytes: the COB-ID heard (LE), 1 if this node gave its node-ID up.
+  const bool yield = finding.action == NodeIdConflict::Action::Yield;
+  const std::array<uint8_t, 5> info{static_cast<uint8_t>(finding.cob_id), static_cast<uint8_t>(finding.cob_id >> 8),
+                                    static_cast<uint8_t>(yield), 0, 0};
+  if (yield) {
+    spdlog::error("node-ID {} is already used by another device (0x{:03X} heard within {} s of boot-up): this node "
+                  "gives it up and waits for an LSS master", node_id(), finding.cob_id,
+                  NodeIdConflict::kClaimPeriodUs / 1'000'000);
+    emcy_.report(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
+    lss_.give_up_node_id();
+    initialise(false, now_us);
+    return;
+  }
+  if (!emcy_.active(emcy_code::kCommunication))
+    spdlog::error("node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps it",
+                  node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
+  emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
+  // A newcomer that booted with this node-ID hears this node's heartbeat within its claim period.
+  if (finding.boot_up) heartbeat_.send_now(state_, now_us);
+}
+
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   if (app_ && booted_) app_->advance(now_us);
   if (frame.id == lss::kMasterToSlave) {
@@ -291,6 +314,10 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
     return;
   }
   if (!configured()) return;
+  if (auto conflict = conflict_.on_frame(frame, dictionary_.get<uint32_t>(0x1014, 0), now_us)) {
+    node_id_conflict(*conflict, now_us);
+    return;
+  }
   // Error control runs in every state.
   if (auto answer = guarding_.on_frame(frame, state_, now_us)) {
     send(*answer);

@@ -15,6 +15,7 @@
 #include "node/lss_store.hpp"
 #include "node/nmt.hpp"
 #include "node/node_guarding.hpp"
+#include "node/node_id_conflict.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
 #include "node/sdo_server_channels.hpp"
@@ -91,6 +92,8 @@ class CanopenNode {
   void handle_nmt(NmtCommand command, uint64_t now_us);
   // The application is told first, then 0x1029 says what happens to the NMT state.
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);
+  // A frame of another device with this node-ID (EMCY 0x8100; yield or keep the node-ID).
+  void node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us);
   void send(const od::CanFrame& frame) { send_(frame); }
 
   // Before options_: the node-ID it holds may be the one the node starts with.
@@ -110,6 +113,7 @@ class CanopenNode {
   PdoEngine pdo_;
   SdoServerChannels sdo_;  // 0x1200..0x1203
   LssSlave lss_;
+  NodeIdConflict conflict_;
   NmtState state_ = NmtState::Initialising;
   bool booted_ = false;  // the application was powered up (the first boot with a node-ID)
   struct PowerUpError {
