@@ -375,8 +375,10 @@ void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
       emcy_.clear(emcy_code::kCanErrorPassive, now_us);
       break;
     case BusEvent::Restarted:
-      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
+      // "Recovered from bus-off" first, then the error reset that ends the error-passive
+      // condition the bus-off came through, with the error register as it is now.
       emcy_.report(emcy_code::kRecoveredFromBusOff, error_bits::kCommunication, {}, now_us);
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
       break;
     case BusEvent::RxOverflow:
     case BusEvent::TxOverflow:

@@ -40,6 +40,7 @@ void PdoEngine::reload(uint64_t now_us) {
     if (!r.valid) {
       r.sync_pending = r.monitoring = false;
       end_timeout(r, now_us);
+      end_length_error(r, now_us);
     }
 
     Tpdo& t = tpdos_[n];
@@ -102,7 +103,10 @@ void PdoEngine::stop() {
 
 void PdoEngine::reset() {
   stop();
-  for (auto& r : rpdos_) r.timed_out = false;
+  for (auto& r : rpdos_) {  // the EMCY producer forgets them too
+    r.timed_out = false;
+    r.length_error = 0;
+  }
 }
 
 void PdoEngine::apply(Rpdo& pdo, std::span<const uint8_t> data) {
@@ -118,6 +122,25 @@ void PdoEngine::end_timeout(Rpdo& pdo, uint64_t now_us) {
   for (const auto& r : rpdos_)
     if (r.timed_out) return;
   emcy_.clear(emcy_code::kRpdoTimeout, now_us);
+}
+
+void PdoEngine::length_error(Rpdo& pdo, uint16_t code, const od::CanFrame& frame, uint64_t now_us) {
+  ++stats_.rpdo_length_errors;
+  if (pdo.length_error == code) return;  // still active: reported once
+  end_length_error(pdo, now_us);
+  pdo.length_error = code;
+  // Manufacturer bytes: the COB-ID (LE) and the length received.
+  emcy_.raise(code, error_bits::kCommunication,
+              {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc}, now_us);
+}
+
+void PdoEngine::end_length_error(Rpdo& pdo, uint64_t now_us) {
+  const uint16_t code = pdo.length_error;
+  if (code == 0) return;
+  pdo.length_error = 0;
+  for (const auto& r : rpdos_)
+    if (r.length_error == code) return;
+  emcy_.clear(code, now_us);
 }
 
 bool PdoEngine::in_window(uint64_t sync_us, uint64_t at_us) const {
@@ -137,18 +160,11 @@ bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx
     // Too short: not processed, EMCY 0x8210. Too long: processed, EMCY 0x8220 (CiA 301
     // 7.2.2.2 leaves the extra bytes unused).
     if (frame.dlc < r.bytes) {
-      ++stats_.rpdo_length_errors;
-      emcy_.report(emcy_code::kPdoLength, error_bits::kCommunication,
-                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
-                   now_us);
+      length_error(r, emcy_code::kPdoLength, frame, now_us);
       continue;
     }
-    if (frame.dlc > r.bytes) {
-      ++stats_.rpdo_length_errors;
-      emcy_.report(emcy_code::kPdoLengthExceeded, error_bits::kCommunication,
-                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
-                   now_us);
-    }
+    if (frame.dlc > r.bytes) length_error(r, emcy_code::kPdoLengthExceeded, frame, now_us);
+    else end_length_error(r, now_us);
     r.last_rx_us = now_us;
     r.monitoring = true;
     end_timeout(r, now_us);

@@ -56,6 +56,7 @@ class PdoEngine {
     std::vector<uint8_t> sync_data;
     bool monitoring = false, timed_out = false;
     uint64_t last_rx_us = 0;
+    uint16_t length_error = 0;  // the EMCY code active for it (0x8210/0x8220), 0: none
   };
   struct Tpdo {
     bool valid = false;
@@ -77,6 +78,11 @@ class PdoEngine {
   void reload(uint64_t now_us);
   // An RPDO is no longer late (received, destroyed): EMCY 0x8250 ends when none is late.
   void end_timeout(Rpdo& pdo, uint64_t now_us);
+  // A length error (EMCY 0x8210 too short, 0x8220 too long) is active from the RPDO's
+  // wrong frame until its next frame of the right length (or it is destroyed, or reset):
+  // then the error reset, when no other RPDO has the same error.
+  void length_error(Rpdo& pdo, uint16_t code, const od::CanFrame& frame, uint64_t now_us);
+  void end_length_error(Rpdo& pdo, uint64_t now_us);
   void transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us);
   void apply(Rpdo& pdo, std::span<const uint8_t> data);
   // True while `at_us` lies within the synchronous window after the last SYNC (always when
