@@ -136,8 +136,9 @@ void CanopenNode::install_service_hooks() {
 
 void CanopenNode::start(uint64_t now_us) {
   if (auto index = lss_.active_bit_timing())
-    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); the interface's bit rate is set outside "
-                 "stepnode (ip link)", *lss::bit_rate_kbit(*index), *index);
+    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); stepnode does not set the interface's bit "
+                 "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
+                 *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
   initialise(true, now_us);
 }
 
@@ -232,8 +233,9 @@ void CanopenNode::on_lss_frame(const od::CanFrame& frame, uint64_t now_us) {
   if (r.response) send(*r.response);
   if (r.activate_bit_timing_delay_ms) {
     const auto index = lss_.active_bit_timing();
-    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: the interface's bit rate is set outside "
-                 "stepnode (ip link)", index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms);
+    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's bit "
+                 "rate; apply it with `tools/lss-bit-timing {} IFACE --apply` (ip link, root)",
+                 index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms, options_.state_dir.string());
   }
   if (r.boot) {
     spdlog::info("LSS: node-ID {} configured: reset communication and boot-up", lss_.pending_node_id());
