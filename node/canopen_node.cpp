@@ -297,9 +297,10 @@ void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint6
   if (!emcy_.active(emcy_code::kCommunication))
     spdlog::error("node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps it",
                   node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
-  emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
-  // A newcomer that booted with this node-ID hears this node's heartbeat within its claim period.
+  // A newcomer that booted with this node-ID hears this node's heartbeat within its claim
+  // period; first, so that it yields to the heartbeat rather than to the EMCY.
   if (finding.boot_up) heartbeat_.send_now(state_, now_us);
+  emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
 }
 
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
