@@ -117,14 +117,14 @@ void add_time(Dictionary& od) {
 }
 
 void add_nmt_startup(Dictionary& od) {
-  // CiA 302-2 0x1F80 NMT startup. Bit 0: 1 = NMT master, which this device is not (refused).
-  // Bit 2: 0 = enter operational by itself after boot-up (a self-starting device), 1 = wait
-  // for NMT start. The other bits are NMT master functions, without effect here. The
-  // default waits for the master, as CiA 301 devices do.
+  // CiA 302-2 0x1F80 NMT startup. Bit 2 ("NMT master start"): 0 = enter operational by
+  // itself after boot-up (a self-starting device), 1 = wait for NMT start, the default, as
+  // CiA 301 devices do. The other bits are NMT master functions this device does not have:
+  // an attempt to change one is refused with 0x06090030, as CiA 302-2 says.
   Entry& startup = od.var(kNmtStartup, "NMT startup", DT::Unsigned32, AC::ReadWrite,
                           encode<uint32_t>(kNmtStartupNoAutoStart));
   startup.validate = [](std::span<const uint8_t> d) {
-    return u32(d) & kNmtStartupMaster ? SdoAbort::InvalidValue : SdoAbort::None;
+    return u32(d) & ~kNmtStartupNoAutoStart ? SdoAbort::InvalidValue : SdoAbort::None;
   };
 }
 

@@ -42,9 +42,12 @@ TEST_F(SelfStartTest, Bit2ClearStoredEntersOperationalAfterBootUp) {
   EXPECT_EQ(heartbeat_states(from), (std::vector<uint8_t>{0x00, 0x7F, 0x05}));
 }
 
-TEST_F(SelfStartTest, ThisDeviceIsNoNmtMaster) {
-  EXPECT_EQ(sdo_write(0x1F80, 0, 0x00000001), 0x06090030u);
+TEST_F(SelfStartTest, ThisDeviceIsNoNmtMasterOtherBitsAreRefused) {
+  // CiA 302-2: changing a bit of a function the device does not support is 0x06090030.
+  EXPECT_EQ(sdo_write(0x1F80, 0, 0x00000001), 0x06090030u);  // NMT master
   EXPECT_EQ(sdo_write(0x1F80, 0, 0x00000005), 0x06090030u);
+  EXPECT_EQ(sdo_write(0x1F80, 0, 0x0000000C), 0x06090030u);  // bit 3: a master function
+  EXPECT_EQ(sdo_write(0x1F80, 0, 0x80000004), 0x06090030u);
   EXPECT_EQ(*sdo_read(0x1F80, 0), 0x00000004u);
 }
 
