@@ -80,13 +80,14 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                         }}),
       sync_(
           dictionary_, [this](const od::CanFrame& f) { send(f); },
-          [this](uint8_t counter, uint64_t now) {
-            pdo_.on_sync(counter, now);
+          [this](uint8_t counter, uint64_t sync_us, uint64_t now) {
+            pdo_.on_sync(counter, sync_us, now);
             if (app_) app_->sync(now);
           },
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
           }),
+      time_(dictionary_, [this](const od::CanFrame& f) { send(f); }, options_.wall_clock),
       pdo_(dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); },
            emcy_),
       sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }),
@@ -135,8 +136,9 @@ void CanopenNode::install_service_hooks() {
 
 void CanopenNode::start(uint64_t now_us) {
   if (auto index = lss_.active_bit_timing())
-    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); the interface's bit rate is set outside "
-                 "stepnode (ip link)", *lss::bit_rate_kbit(*index), *index);
+    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); stepnode does not set the interface's bit "
+                 "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
+                 *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
   initialise(true, now_us);
 }
 
@@ -201,9 +203,17 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   consumer_.reset();
   guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
   sync_.reset(now_us);
+  time_.reset(now_us);
   // Boot-up message: the heartbeat COB-ID with state 0 (CiA 301 7.2.8.3.2.1).
   send(od::CanFrame(od::cob::kHeartbeat + node_id(), {0x00}));
+  conflict_.booted(node_id(), now_us);
   enter(NmtState::PreOperational, now_us);
+  // A self-starting device (CiA 302-2, 0x1F80 bit 2 = 0) enters operational by itself after
+  // every boot-up, without an NMT master; NMT commands still move it after that.
+  if (!(dictionary_.get<uint32_t>(od::kNmtStartup, 0) & od::kNmtStartupNoAutoStart)) {
+    spdlog::info("NMT startup 0x1F80 bit 2 is 0: self-start");
+    enter(NmtState::Operational, now_us);
+  }
 }
 
 void CanopenNode::adopt_node_id(uint8_t id) {
@@ -223,8 +233,9 @@ void CanopenNode::on_lss_frame(const od::CanFrame& frame, uint64_t now_us) {
   if (r.response) send(*r.response);
   if (r.activate_bit_timing_delay_ms) {
     const auto index = lss_.active_bit_timing();
-    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: the interface's bit rate is set outside "
-                 "stepnode (ip link)", index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms);
+    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's bit "
+                 "rate; apply it with `tools/lss-bit-timing {} IFACE --apply` (ip link, root)",
+                 index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms, options_.state_dir.string());
   }
   if (r.boot) {
     spdlog::info("LSS: node-ID {} configured: reset communication and boot-up", lss_.pending_node_id());
@@ -269,7 +280,30 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
   }
 }
 
-void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us) {
+  // Manufacturer bytes: the COB-ID heard (LE), 1 if this node gave its node-ID up.
+  const bool yield = finding.action == NodeIdConflict::Action::Yield;
+  const std::array<uint8_t, 5> info{static_cast<uint8_t>(finding.cob_id), static_cast<uint8_t>(finding.cob_id >> 8),
+                                    static_cast<uint8_t>(yield), 0, 0};
+  if (yield) {
+    spdlog::error("node-ID {} is already used by another device (0x{:03X} heard within {} s of boot-up): this node "
+                  "gives it up and waits for an LSS master", node_id(), finding.cob_id,
+                  NodeIdConflict::kClaimPeriodUs / 1'000'000);
+    emcy_.report(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
+    lss_.give_up_node_id();
+    initialise(false, now_us);
+    return;
+  }
+  if (!emcy_.active(emcy_code::kCommunication))
+    spdlog::error("node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps it",
+                  node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
+  // A newcomer that booted with this node-ID hears this node's heartbeat within its claim
+  // period; first, so that it yields to the heartbeat rather than to the EMCY.
+  if (finding.boot_up) heartbeat_.send_now(state_, now_us);
+  emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
+}
+
+void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   if (app_ && booted_) app_->advance(now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
@@ -283,6 +317,10 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
     return;
   }
   if (!configured()) return;
+  if (auto conflict = conflict_.on_frame(frame, dictionary_.get<uint32_t>(0x1014, 0), now_us)) {
+    node_id_conflict(*conflict, now_us);
+    return;
+  }
   // Error control runs in every state.
   if (auto answer = guarding_.on_frame(frame, state_, now_us)) {
     send(*answer);
@@ -291,12 +329,12 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us) {
   consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
-  if (sync_.on_frame(frame, now_us)) {
+  if (sync_.on_frame(frame, now_us, arrival_us) || time_.on_frame(frame, now_us, arrival_us)) {
     // handled
   } else if (sdo_.on_frame(frame, now_us)) {
     // handled by the SDO server channel it was addressed to
   } else if (state_ == NmtState::Operational) {
-    pdo_.on_frame(frame, now_us);
+    pdo_.on_frame(frame, now_us, arrival_us);
   }
   // A received frame may change mapped values: event-driven TPDOs go out now, not on the
   // next tick.
@@ -312,6 +350,7 @@ void CanopenNode::on_tick(uint64_t now_us) {
   if (state_ == NmtState::Stopped) return;
   sdo_.on_tick(now_us);
   sync_.on_tick(now_us);
+  time_.on_tick(now_us);
   pdo_.on_tick(now_us);
   emcy_.on_tick(now_us);
 }
@@ -339,8 +378,10 @@ void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
       emcy_.clear(emcy_code::kCanErrorPassive, now_us);
       break;
     case BusEvent::Restarted:
-      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
+      // "Recovered from bus-off" first, then the error reset that ends the error-passive
+      // condition the bus-off came through, with the error register as it is now.
       emcy_.report(emcy_code::kRecoveredFromBusOff, error_bits::kCommunication, {}, now_us);
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
       break;
     case BusEvent::RxOverflow:
     case BusEvent::TxOverflow:

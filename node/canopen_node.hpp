@@ -15,10 +15,12 @@
 #include "node/lss_store.hpp"
 #include "node/nmt.hpp"
 #include "node/node_guarding.hpp"
+#include "node/node_id_conflict.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
 #include "node/sdo_server_channels.hpp"
 #include "node/sync.hpp"
+#include "node/time_service.hpp"
 #include "od/can_frame.hpp"
 #include "node/device_objects.hpp"
 #include "od/communication_objects.hpp"
@@ -36,6 +38,9 @@ struct NodeOptions {
   DeviceLayout layout;  // the profiles and axes (the PDO count follows)
   std::filesystem::path state_dir = ".";
   uint64_t sdo_timeout_us = 1'000'000;
+  // The wall clock for a TIME producer (us since 1970, CLOCK_REALTIME in node/main.cpp);
+  // empty: a producer sends the network time it received (tests give virtual time).
+  TimeService::WallClock wall_clock;
 };
 
 // What the CAN controller reports (SocketCAN error frames), as the node sees it.
@@ -50,7 +55,9 @@ class CanopenNode {
   // Power-on: load stored parameters, send boot-up, enter pre-operational. Without a
   // node-ID: nothing but the LSS slave, until a master gives it one (CiA 305).
   void start(uint64_t now_us);
-  void on_frame(const od::CanFrame& frame, uint64_t now_us);
+  // `arrival_us`: when the frame reached the interface (kernel timestamp; 0 unknown): the
+  // synchronous window 0x1007 is measured from a SYNC's arrival.
+  void on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   void on_tick(uint64_t now_us);
   void on_bus_event(BusEvent event, uint64_t now_us);
   // The socket's count of received frames it dropped (its queue was full), as reported
@@ -85,6 +92,8 @@ class CanopenNode {
   void handle_nmt(NmtCommand command, uint64_t now_us);
   // The application is told first, then 0x1029 says what happens to the NMT state.
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);
+  // A frame of another device with this node-ID (EMCY 0x8100; yield or keep the node-ID).
+  void node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us);
   void send(const od::CanFrame& frame) { send_(frame); }
 
   // Before options_: the node-ID it holds may be the one the node starts with.
@@ -100,9 +109,11 @@ class CanopenNode {
   HeartbeatConsumer consumer_;
   NodeGuarding guarding_;  // 0x100C, 0x100D; only while 0x1017 is 0
   SyncService sync_;
+  TimeService time_;  // 0x1012, 0x2F12
   PdoEngine pdo_;
   SdoServerChannels sdo_;  // 0x1200..0x1203
   LssSlave lss_;
+  NodeIdConflict conflict_;
   NmtState state_ = NmtState::Initialising;
   bool booted_ = false;  // the application was powered up (the first boot with a node-ID)
   struct PowerUpError {

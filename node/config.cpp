@@ -92,6 +92,9 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   load_profiles(file, cfg.options.layout);
   if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll)) cfg.options.device.serial_number = static_cast<uint32_t>(*n);
   if (auto level = file.string("log_level")) cfg.log_level = *level;
+  // self_start: the default of 0x1F80 NMT startup (CiA 302-2 bit 2: 0 = enter operational
+  // by itself after boot-up); [defaults] "1F80" and a stored value go over it.
+  if (auto on = file.boolean("self_start")) cfg.object_defaults.emplace_back("1F80", *on ? "0" : "4");
   load_object_defaults(file, cfg);
   return id_set;
 }

@@ -41,7 +41,7 @@ std::vector<RefusedMapping> Device::complete_dictionary(CanopenNode& canopen, co
 
 void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   frame_arrival_us_ = arrival_us && arrival_us <= now_us ? arrival_us : 0;
-  canopen_.on_frame(frame, now_us);
+  canopen_.on_frame(frame, now_us, frame_arrival_us_);
   frame_arrival_us_ = 0;
 }
 

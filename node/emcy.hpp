@@ -28,6 +28,7 @@ namespace emcy_code {
 constexpr uint16_t kNoError = 0x0000;
 constexpr uint16_t kDataStorage = 0x5530;   // stored parameters damaged or refused
 constexpr uint16_t kSoftware = 0x6100;      // internal software: a configured value refused
+constexpr uint16_t kCommunication = 0x8100;  // communication, generic: another device has our node-ID
 constexpr uint16_t kCanOverrun = 0x8110;
 constexpr uint16_t kCanErrorPassive = 0x8120;
 constexpr uint16_t kHeartbeatError = 0x8130;

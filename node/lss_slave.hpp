@@ -100,6 +100,9 @@ class LssSlave {
   // NMT reset communication: the pending node-ID becomes the active one (CiA 305 V3.0,
   // "configure node-ID"). Returns it.
   uint8_t activate_pending_node_id();
+  // Another device has the node-ID (node/node_id_conflict.hpp): none, active or pending,
+  // so the next reset communication leaves the device waiting for a master.
+  void give_up_node_id() { active_node_id_ = pending_node_id_ = lss::kUnconfigured; }
 
   lss::State state() const { return state_; }
   uint8_t active_node_id() const { return active_node_id_; }

@@ -11,6 +11,7 @@
 #include "node/config.hpp"
 #include "node/device.hpp"
 #include "canio/event_loop.hpp"
+#include "canio/link_info.hpp"
 #include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
 #include "od/eds.hpp"
@@ -47,8 +48,35 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
   return now - static_cast<uint64_t>(age_us);
 }
 
-int run(const node::NodeConfig& cfg) {
+// CiA 305's stored bit timing against the interface's bit rate: stepnode never sets it (root
+// does, with ip link; tools/lss-bit-timing is the hook), but it says when they differ.
+void report_bit_timing(node::Device& device, const node::NodeConfig& cfg) {
+  const auto index = device.canopen().lss().active_bit_timing();
+  const auto link = index ? canio::link_info(cfg.iface) : std::nullopt;
+  if (!link) return;
+  const unsigned kbit = node::lss::bit_rate_kbit(*index).value_or(0);
+  const std::string hook = "tools/lss-bit-timing " + cfg.options.state_dir.string() + " " + cfg.iface + " --apply";
+  if (link->kind == "vcan")
+    spdlog::warn("LSS: the stored bit timing {} kbit/s cannot be applied: {} is a virtual CAN interface without a "
+                 "bit rate", kbit, cfg.iface);
+  else if (!link->bit_rate)
+    spdlog::warn("LSS: stored bit timing {} kbit/s; {}'s bit rate is not known (kind \"{}\")", kbit, cfg.iface, link->kind);
+  else if (*link->bit_rate != kbit * 1000)
+    spdlog::warn("LSS: the stored bit timing {} kbit/s differs from {}'s {} bit/s; apply it with `{}` (root)", kbit,
+                 cfg.iface, *link->bit_rate, hook);
+  else
+    spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
+}
+
+uint64_t wall_clock_us() {
+  timespec real{};
+  clock_gettime(CLOCK_REALTIME, &real);
+  return static_cast<uint64_t>(real.tv_sec) * 1'000'000 + static_cast<uint64_t>(real.tv_nsec) / 1000;
+}
+
+int run(node::NodeConfig cfg) {
   canio::SocketCan can(cfg.iface);
+  cfg.options.wall_clock = wall_clock_us;  // a TIME producer sends this host's time
   node::Device device(cfg.options, cfg.object_defaults, [&can](const od::CanFrame& f) { can.send(f); });
 
   canio::EventLoop loop;
@@ -93,6 +121,7 @@ int run(const node::NodeConfig& cfg) {
   else
     spdlog::info("node without a node-ID on {} (LSS-unconfigured), {} axes, LSS configuration in {}", cfg.iface,
                  cfg.options.layout.axes, device.canopen().lss_file().string());
+  report_bit_timing(device, cfg);
   device.start(canio::EventLoop::now_us());
   can.flush();
   tell_ready_once_sent();

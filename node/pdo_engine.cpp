@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "od/communication_objects.hpp"
+
 namespace stepnode::node {
 namespace {
 
@@ -38,6 +40,7 @@ void PdoEngine::reload(uint64_t now_us) {
     if (!r.valid) {
       r.sync_pending = r.monitoring = false;
       end_timeout(r, now_us);
+      end_length_error(r, now_us);
     }
 
     Tpdo& t = tpdos_[n];
@@ -94,12 +97,16 @@ void PdoEngine::start(uint64_t now_us) {
 
 void PdoEngine::stop() {
   running_ = false;
+  sync_seen_ = false;
   for (auto& r : rpdos_) r.sync_pending = r.monitoring = false;
 }
 
 void PdoEngine::reset() {
   stop();
-  for (auto& r : rpdos_) r.timed_out = false;
+  for (auto& r : rpdos_) {  // the EMCY producer forgets them too
+    r.timed_out = false;
+    r.length_error = 0;
+  }
 }
 
 void PdoEngine::apply(Rpdo& pdo, std::span<const uint8_t> data) {
@@ -117,8 +124,33 @@ void PdoEngine::end_timeout(Rpdo& pdo, uint64_t now_us) {
   emcy_.clear(emcy_code::kRpdoTimeout, now_us);
 }
 
-bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+void PdoEngine::length_error(Rpdo& pdo, uint16_t code, const od::CanFrame& frame, uint64_t now_us) {
+  ++stats_.rpdo_length_errors;
+  if (pdo.length_error == code) return;  // still active: reported once
+  end_length_error(pdo, now_us);
+  pdo.length_error = code;
+  // Manufacturer bytes: the COB-ID (LE) and the length received.
+  emcy_.raise(code, error_bits::kCommunication,
+              {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc}, now_us);
+}
+
+void PdoEngine::end_length_error(Rpdo& pdo, uint64_t now_us) {
+  const uint16_t code = pdo.length_error;
+  if (code == 0) return;
+  pdo.length_error = 0;
+  for (const auto& r : rpdos_)
+    if (r.length_error == code) return;
+  emcy_.clear(code, now_us);
+}
+
+bool PdoEngine::in_window(uint64_t sync_us, uint64_t at_us) const {
+  const uint32_t window_us = dictionary_.get<uint32_t>(od::kSyncWindowLength, 0);
+  return window_us == 0 || (at_us >= sync_us && at_us - sync_us <= window_us);
+}
+
+bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx_us) {
   if (dirty_) reload(now_us);
+  if (rx_us == 0 || rx_us > now_us) rx_us = now_us;
   if (frame.rtr) return false;
   bool consumed = false;
   for (auto& r : rpdos_) {
@@ -128,23 +160,24 @@ bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us) {
     // Too short: not processed, EMCY 0x8210. Too long: processed, EMCY 0x8220 (CiA 301
     // 7.2.2.2 leaves the extra bytes unused).
     if (frame.dlc < r.bytes) {
-      ++stats_.rpdo_length_errors;
-      emcy_.report(emcy_code::kPdoLength, error_bits::kCommunication,
-                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
-                   now_us);
+      length_error(r, emcy_code::kPdoLength, frame, now_us);
       continue;
     }
-    if (frame.dlc > r.bytes) {
-      ++stats_.rpdo_length_errors;
-      emcy_.report(emcy_code::kPdoLengthExceeded, error_bits::kCommunication,
-                   {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
-                   now_us);
-    }
+    if (frame.dlc > r.bytes) length_error(r, emcy_code::kPdoLengthExceeded, frame, now_us);
+    else end_length_error(r, now_us);
     r.last_rx_us = now_us;
     r.monitoring = true;
     end_timeout(r, now_us);
     std::span<const uint8_t> data(frame.data.data(), r.bytes);
     if (r.type <= 240) {  // synchronous: applied at the next SYNC
+      // CiA 301 7.2.2.2 (synchronous window): synchronous RPDO data that arrives after the
+      // window has closed is discarded; before the first SYNC no window has opened.
+      // Only with a window configured: without one (0x1007 = 0) every PDO counts.
+      const bool window_used = dictionary_.get<uint32_t>(od::kSyncWindowLength, 0) != 0;
+      if (window_used && (!sync_seen_ || !in_window(last_sync_us_, rx_us))) {
+        ++stats_.rpdo_outside_window;
+        continue;
+      }
       r.sync_data.assign(data.begin(), data.end());
       r.sync_pending = true;
     } else {
@@ -165,37 +198,55 @@ void PdoEngine::transmit(Tpdo& t, std::vector<uint8_t> data, uint64_t now_us) {
   t.event_pending = false;
 }
 
-void PdoEngine::on_sync(uint8_t counter, uint64_t now_us) {
+void PdoEngine::on_sync(uint8_t counter, uint64_t sync_us, uint64_t now_us) {
   if (dirty_) reload(now_us);
   if (!running_) return;
+  if (sync_us == 0 || sync_us > now_us) sync_us = now_us;
   for (auto& r : rpdos_) {
     if (r.valid && r.sync_pending) {
       r.sync_pending = false;
       apply(r, r.sync_data);
     }
   }
-  for (auto& t : tpdos_) {
-    if (!t.valid || t.type > 240) continue;
-    if (t.waiting_sync_start && counter != 0) {
-      // With a SYNC counter, the first transmission waits for the start value (7.5.2.35).
-      if (counter != t.sync_start) continue;
-      t.waiting_sync_start = false;
-      t.sync_count = t.type;  // transmit on this SYNC
-    } else {
-      // A SYNC without a counter (0x1019 = 0): the start value is ignored (CiA 301, TPDO
-      // communication parameter sub-index 06h); waiting for it kept the TPDO silent.
-      t.waiting_sync_start = false;
-      ++t.sync_count;
+  sync_seen_ = true;
+  last_sync_us_ = sync_us;
+  // The TPDOs of this SYNC go out now; if the SYNC is handled after its window closed
+  // (the process came to it late), they are not sent in this cycle (CiA 301 7.2.2.2).
+  const bool window_open = in_window(sync_us, now_us);
+  for (auto& t : tpdos_)
+    if (t.valid && t.type <= 240) sync_tpdo(t, counter, window_open, now_us);
+}
+
+void PdoEngine::sync_tpdo(Tpdo& t, uint8_t counter, bool window_open, uint64_t now_us) {
+  if (t.waiting_sync_start && counter != 0) {
+    // With a SYNC counter, the first transmission waits for the start value (7.5.2.35).
+    if (counter != t.sync_start) return;
+    t.waiting_sync_start = false;
+    t.sync_count = t.type;  // transmit on this SYNC
+  } else {
+    // A SYNC without a counter (0x1019 = 0): the start value is ignored (CiA 301, TPDO
+    // communication parameter sub-index 06h); waiting for it kept the TPDO silent.
+    t.waiting_sync_start = false;
+    ++t.sync_count;
+  }
+  std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
+  if (t.type == 0) {
+    // Acyclic synchronous: sent on the SYNC after a change. A change whose window passed
+    // is still a change at the next SYNC.
+    if (t.event_pending || data != t.last_data) {
+      if (window_open) {
+        transmit(t, std::move(data), now_us);
+      } else {
+        t.event_pending = true;
+        ++stats_.tpdo_outside_window;
+      }
     }
-    std::vector<uint8_t> data = od::pack_pdo(dictionary_, t.mapping);
-    if (t.type == 0) {
-      // Acyclic synchronous: sent on the SYNC after a change.
-      if (t.event_pending || data != t.last_data) transmit(t, std::move(data), now_us);
-      t.sync_count = 0;
-    } else if (t.sync_count >= t.type) {
-      t.sync_count = 0;
-      transmit(t, std::move(data), now_us);
-    }
+    t.sync_count = 0;
+  } else if (t.sync_count >= t.type) {
+    // Cyclic: this cycle's transmission is lost; the count starts again for the next one.
+    t.sync_count = 0;
+    if (window_open) transmit(t, std::move(data), now_us);
+    else ++stats_.tpdo_outside_window;
   }
 }
 

@@ -22,9 +22,11 @@ class PdoEngine {
   // A communication or mapping parameter changed: re-read before the next use.
   void mark_dirty() { dirty_ = true; }
   // Handles a frame if it is one of our RPDOs (call only in operational). Returns true if
-  // the frame was an RPDO of this node.
-  bool on_frame(const od::CanFrame& frame, uint64_t now_us);
-  void on_sync(uint8_t counter, uint64_t now_us);
+  // the frame was an RPDO of this node. `rx_us`: when it reached the bus interface (0:
+  // unknown, now), against which the synchronous window 0x1007 is measured.
+  bool on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx_us = 0);
+  // A SYNC that reached the interface at `sync_us` (<= now_us), handled at `now_us`.
+  void on_sync(uint8_t counter, uint64_t sync_us, uint64_t now_us);
   void on_tick(uint64_t now_us);
   // Entering operational: event-driven TPDOs go out once with the current values.
   void start(uint64_t now_us);
@@ -36,6 +38,8 @@ class PdoEngine {
   struct Stats {
     uint64_t rpdo_received = 0, rpdo_length_errors = 0, rpdo_write_errors = 0;
     uint64_t tpdo_sent = 0;
+    // Synchronous PDOs outside the window 0x1007: RPDOs discarded, TPDO cycles not sent.
+    uint64_t rpdo_outside_window = 0, tpdo_outside_window = 0;
   };
   const Stats& stats() const { return stats_; }
 
@@ -52,6 +56,7 @@ class PdoEngine {
     std::vector<uint8_t> sync_data;
     bool monitoring = false, timed_out = false;
     uint64_t last_rx_us = 0;
+    uint16_t length_error = 0;  // the EMCY code active for it (0x8210/0x8220), 0: none
   };
   struct Tpdo {
     bool valid = false;
@@ -73,8 +78,17 @@ class PdoEngine {
   void reload(uint64_t now_us);
   // An RPDO is no longer late (received, destroyed): EMCY 0x8250 ends when none is late.
   void end_timeout(Rpdo& pdo, uint64_t now_us);
+  // A length error (EMCY 0x8210 too short, 0x8220 too long) is active from the RPDO's
+  // wrong frame until its next frame of the right length (or it is destroyed, or reset):
+  // then the error reset, when no other RPDO has the same error.
+  void length_error(Rpdo& pdo, uint16_t code, const od::CanFrame& frame, uint64_t now_us);
+  void end_length_error(Rpdo& pdo, uint64_t now_us);
   void transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us);
   void apply(Rpdo& pdo, std::span<const uint8_t> data);
+  // True while `at_us` lies within the synchronous window after the last SYNC (always when
+  // 0x1007 is 0).
+  bool in_window(uint64_t sync_us, uint64_t at_us) const;
+  void sync_tpdo(Tpdo& t, uint8_t counter, bool window_open, uint64_t now_us);
 
   od::Dictionary& dictionary_;
   unsigned count_;
@@ -84,6 +98,9 @@ class PdoEngine {
   std::vector<Tpdo> tpdos_;
   bool dirty_ = true;
   bool running_ = false;
+  // The last SYNC since entering operational (its arrival), for the synchronous window.
+  bool sync_seen_ = false;
+  uint64_t last_sync_us_ = 0;
   Stats stats_;
 };
 

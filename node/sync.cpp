@@ -14,7 +14,7 @@ bool SyncService::producer() const {
          dictionary_.get<uint32_t>(0x1006, 0) != 0;
 }
 
-bool SyncService::on_frame(const od::CanFrame& frame, uint64_t now_us) {
+bool SyncService::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
   if (frame.rtr || frame.id != cob_id()) return false;
   uint8_t overflow = dictionary_.get<uint8_t>(0x1019, 0);
   // With a counter configured the SYNC carries 1 byte, without it none (CiA 301 7.2.5.3).
@@ -23,7 +23,7 @@ bool SyncService::on_frame(const od::CanFrame& frame, uint64_t now_us) {
     if (on_bad_length_) on_bad_length_(frame.dlc, now_us);
     return true;
   }
-  on_sync_(overflow ? frame.data[0] : 0, now_us);
+  on_sync_(overflow ? frame.data[0] : 0, arrival_us && arrival_us <= now_us ? arrival_us : now_us, now_us);
   return true;
 }
 
@@ -59,7 +59,7 @@ void SyncService::on_tick(uint64_t now_us) {
   }
   send_(f);
   // A CAN controller does not receive its own frames: the producer's SYNC acts here too.
-  on_sync_(overflow ? counter_ : 0, now_us);
+  on_sync_(overflow ? counter_ : 0, now_us, now_us);
 }
 
 }  // namespace stepnode::node

@@ -12,14 +12,16 @@ namespace stepnode::node {
 class SyncService {
  public:
   using Send = std::function<void(const od::CanFrame&)>;
-  // on_sync(counter or 0, now): every SYNC, received or produced here.
-  using OnSync = std::function<void(uint8_t counter, uint64_t now_us)>;
+  // on_sync(counter or 0, sync, now): every SYNC, received or produced here; `sync_us` is
+  // when it reached the interface (or was sent), `now_us` when it is handled.
+  using OnSync = std::function<void(uint8_t counter, uint64_t sync_us, uint64_t now_us)>;
   // on_bad_length(dlc, now): a SYNC whose length does not match 0x1019 (EMCY 0x8240).
   using OnBadLength = std::function<void(uint8_t dlc, uint64_t now_us)>;
   SyncService(od::Dictionary& dictionary, Send send, OnSync on_sync, OnBadLength on_bad_length);
 
-  // Returns true when the frame was a SYNC (consumed).
-  bool on_frame(const od::CanFrame& frame, uint64_t now_us);
+  // Returns true when the frame was a SYNC (consumed). `arrival_us`: its kernel receive
+  // timestamp (0: unknown, now).
+  bool on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   // Produces SYNC when 0x1005 bit 30 is set and 0x1006 is not 0.
   void on_tick(uint64_t now_us);
   void reset(uint64_t now_us);  // restart the producer's period and counter

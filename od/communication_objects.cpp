@@ -75,6 +75,9 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
     return SdoAbort::None;
   };
   od.var(0x1006, "Communication cycle period", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
+  // CiA 301 7.5.2.8: the window (us) after a SYNC in which synchronous PDOs are sent and
+  // accepted; 0 = not used.
+  od.var(kSyncWindowLength, "Synchronous window length", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
   Entry& overflow = od.var(0x1019, "Synchronous counter overflow value", DT::Unsigned8,
                            AC::ReadWrite, {0});
   // 0 = no counter, 2..240 = counter range; 1 and 241..255 are reserved. The value may
@@ -94,6 +97,35 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
     return check_cob_id(od.get<uint32_t>(0x1014, 0), u32(d), kCobInvalid);
   };
   od.var(0x1015, "Inhibit time EMCY", DT::Unsigned16, AC::ReadWrite, encode<uint16_t>(0));
+}
+
+void add_time(Dictionary& od) {
+  // CiA 301 7.5.2.14: bit 31 consumes TIME, bit 30 produces it, bit 29 = 29-bit CAN-ID (not
+  // supported here). The default: consumer on 0x100.
+  Entry& time = od.var(0x1012, "COB-ID time stamp object", DT::Unsigned32, AC::ReadWrite,
+                       encode<uint32_t>(kCobInvalid | cob::kTimeStamp));
+  time.validate = [&od](std::span<const uint8_t> d) {
+    const uint32_t current = od.get<uint32_t>(0x1012, 0), next = u32(d);
+    constexpr uint32_t kInUse = kCobInvalid | kCobGenerate;  // consumer, producer
+    if (next & (kCobExtended | kCobIdHighBits)) return SdoAbort::InvalidValue;
+    if (is_restricted_can_id(next & 0x7FF)) return SdoAbort::InvalidValue;
+    // The CAN-ID does not change while the TIME object is consumed or produced.
+    if ((next & 0x7FF) != (current & 0x7FF) && (current & kInUse) && (next & kInUse))
+      return SdoAbort::InvalidValue;
+    return SdoAbort::None;
+  };
+}
+
+void add_nmt_startup(Dictionary& od) {
+  // CiA 302-2 0x1F80 NMT startup. Bit 2 ("NMT master start"): 0 = enter operational by
+  // itself after boot-up (a self-starting device), 1 = wait for NMT start, the default, as
+  // CiA 301 devices do. The other bits are NMT master functions this device does not have:
+  // an attempt to change one is refused with 0x06090030, as CiA 302-2 says.
+  Entry& startup = od.var(kNmtStartup, "NMT startup", DT::Unsigned32, AC::ReadWrite,
+                          encode<uint32_t>(kNmtStartupNoAutoStart));
+  startup.validate = [](std::span<const uint8_t> d) {
+    return u32(d) & ~kNmtStartupNoAutoStart ? SdoAbort::InvalidValue : SdoAbort::None;
+  };
 }
 
 void add_heartbeat(Dictionary& od) {
@@ -241,7 +273,9 @@ void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigne
   add_identity(od, info);
   add_error_history(od);
   add_sync_and_emcy(od, info);
+  add_time(od);
   add_heartbeat(od);
+  add_nmt_startup(od);
   add_node_guarding(od);
   add_error_behaviour(od);
   add_store_restore(od);

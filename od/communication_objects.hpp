@@ -23,6 +23,10 @@ struct DeviceInfo {
 };
 
 constexpr unsigned kHeartbeatConsumers = 4;
+constexpr uint16_t kSyncWindowLength = 0x1007;  // us; 0: no window
+// 0x1F80 NMT startup (CiA 302-2): bit 2 = 1 do not start by itself (the only bit supported).
+constexpr uint16_t kNmtStartup = 0x1F80;
+constexpr uint32_t kNmtStartupNoAutoStart = 0x04;
 constexpr unsigned kErrorHistoryLength = 8;
 // 0x1029 error behaviour (CiA 301 7.5.2.32), sub 1: the communication error class.
 constexpr uint16_t kErrorBehaviour = 0x1029;

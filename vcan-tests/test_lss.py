@@ -75,6 +75,8 @@ def test_configure_store_reboot_inquire(master, lss, start_node, tmp_path):
     node = start_unconfigured(start_node, serial, state)
     assert master.wait_bootup(NODE, timeout=BOOT_TIMEOUT) is not None, node.log()
     assert "stored bit timing 250 kbit/s" in node.log()
+    # Compared with the interface's (rtnetlink): vcan has no bit rate, so it is not applied.
+    assert "cannot be applied: vcan0 is a virtual CAN interface" in node.log(), node.log()
     assert lss.identify_non_configured() == 0
     assert lss.switch_state_selective(address(serial))
     assert lss.inquire_address() == address(serial)

@@ -321,6 +321,9 @@ TEST_F(NodeTest, FuzzReceivePaths) {
     f.dlc = static_cast<uint8_t>(rng() % 9);
     for (auto& b : f.data) b = static_cast<uint8_t>(rng());
     f.rtr = rng() % 50 == 0;
+    // A data frame on 0x705, 0x585 or 0x85 is another device with this node-ID: the node
+    // gives the id up (node_id_conflict_test.cpp). As remote frames they still test the paths.
+    if (f.id == 0x705 || f.id == 0x585 || f.id == 0x85) f.rtr = true;
     sent.clear();
     frame(f);
     if (i % 100 == 0) tick_ms(1);

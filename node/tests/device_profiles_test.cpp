@@ -43,7 +43,7 @@ TEST_F(DeviceProfiles, AnHpOnlyDeviceHasOnlyTheChannelsObjects) {
     const unsigned offset = i & 0xFF;
     const bool hp = i < 0x2800 && offset >= 0x10 && offset <= 0x1F;
     const bool sim = i >= 0x5000 && (offset <= 0x05 || i == 0x5F00);
-    EXPECT_TRUE(hp || sim || i == 0x2F10 || i == 0x2F11);
+    EXPECT_TRUE(hp || sim || i == 0x2F10 || i == 0x2F11 || i == 0x2F12);
   }
   EXPECT_TRUE(eds_manufacturer_objects().count(hp44714a::obj::index(1, hp44714a::obj::kDone)));
   // The Horner registers and the user objects are not there.
@@ -82,7 +82,7 @@ TEST_F(DeviceProfiles, AHornerOnlyDeviceHasOnlyTheRegisters) {
     const unsigned offset = i & 0xFF;
     const bool horner = i < 0x2800 && offset <= 0x0A;
     const bool sim = i >= 0x5000 && (offset <= 0x04 || i == 0x5F00);
-    EXPECT_TRUE(horner || sim || i == 0x2F10 || i == 0x2F11);
+    EXPECT_TRUE(horner || sim || i == 0x2F10 || i == 0x2F11 || i == 0x2F12);
   }
   EXPECT_EQ(sdo_write(hp44714a::obj::index(0, hp44714a::obj::kTrig), 0, 1, 1), kNoObject);
   EXPECT_NE(cob_id(0x1803) & 0x80000000u, 0u);  // TPDO 4 (the HP channel's) maps nothing

@@ -16,6 +16,7 @@
 #include "tools/stepctl/axis_commands.hpp"
 #include "tools/stepctl/drive_command.hpp"
 #include "tools/stepctl/hp_command.hpp"
+#include "tools/stepctl/lss_command.hpp"
 #include "tools/stepctl/hp_words.hpp"
 
 using namespace stepnode;
@@ -157,6 +158,7 @@ struct Options {
   std::string hp_words, hp_program;
   int hp_channel = 0, hp_wait_s = 120;
   DriveArgs drive_args;
+  LssArgs lss_args;
 };
 
 // The subcommands that are not axis verbs (those are looked up by name: kAxisVerbs).
@@ -168,6 +170,7 @@ struct Subcommands {
   CLI::App* watch = nullptr;
   CLI::App* hp = nullptr;
   CLI::App* drive = nullptr;
+  CLI::App* lss = nullptr;
 };
 
 constexpr const char* kAxisVerbs[] = {"clear", "home", "move", "jog", "stop", "estop", "status"};
@@ -288,6 +291,7 @@ int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
     return run_hp_program(bus, o.node, static_cast<unsigned>(o.hp_channel), listing, o.hp_wait_s);
   if (*s.hp) return run_hp_command(bus, o.node, static_cast<unsigned>(o.hp_channel), o.hp_words, o.hp_wait_s);
   if (*s.drive) return as_failure([&] { return run_drive_command(bus, catalog, o.drive_args); });
+  if (*s.lss) return as_failure([&] { return run_lss_command(bus, o.lss_args, o.timeout_ms); });
   for (const char* verb : kAxisVerbs) {
     if (!*app.get_subcommand(verb)) continue;
     std::vector<std::string> words{verb};
@@ -308,6 +312,8 @@ int stepctl(int argc, char** argv) {
   subcommands.hp = add_hp_command(app, options);
   // CiA 402: stepctl drive status|enable|disable|quick-stop|fault-reset|pp|pv|home --node N --axis A
   subcommands.drive = add_drive_command(app, options.drive_args);
+  // CiA 305: stepctl lss switch|configure|activate-bit-timing|store|inquire|fast-scan
+  subcommands.lss = add_lss_command(app, options.lss_args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

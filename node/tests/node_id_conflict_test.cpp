@@ -1,0 +1,91 @@
+// Another device with this node's node-ID (README, "Duplicate node-ID"): a frame on a
+// COB-ID only this node produces (0x700+id boot-up or heartbeat, 0x580+id SDO answer, the
+// EMCY COB-ID). Within 2 s of its boot-up the node yields the node-ID and waits for LSS;
+// later it keeps it and reports. EMCY frames written from CiA 301 7.2.7.3.1: code 0x8100
+// (communication, generic) little-endian, the error register, five manufacturer bytes
+// (here the COB-ID heard, little-endian, and 1 when the node yielded).
+#include "node/tests/node_harness.hpp"
+
+namespace stepnode::node::test {
+namespace {
+
+class NodeIdConflictTest : public NodeHarness {
+ protected:
+  static CanFrame lss(std::initializer_list<uint8_t> bytes) {
+    CanFrame f(0x7E5, {0, 0, 0, 0, 0, 0, 0, 0});
+    size_t i = 0;
+    for (uint8_t b : bytes) f.data[i++] = b;
+    return f;
+  }
+};
+
+TEST_F(NodeIdConflictTest, AHeartbeatWithItsIdAfterTheClaimPeriodIsReportedAndTheNodeKeepsIt) {
+  advance_ms(3000);
+  size_t from = sent.size();
+  frame(CanFrame(kHeartbeatId, {0x05}));
+  // 0x8100, register 0x11 (generic, communication), 0x0705, kept.
+  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x00, 0x00, 0x00})}));
+  EXPECT_EQ(*sdo_read(0x1001, 0), 0x11u);
+  EXPECT_EQ(*sdo_read(0x1003, 1), 0x07058100u);  // the code and the first two manufacturer bytes
+  EXPECT_TRUE(node->configured());
+  EXPECT_EQ(node->state(), NmtState::PreOperational);
+  frame(CanFrame(kHeartbeatId, {0x05}));
+  EXPECT_EQ(emcys(from).size(), 1u);  // active: reported once
+  nmt(0x01);
+  EXPECT_EQ(node->state(), NmtState::Operational);  // the node goes on serving
+}
+
+TEST_F(NodeIdConflictTest, ABootUpWithItsIdIsAnsweredWithTheHeartbeatAtOnce) {
+  advance_ms(3000);
+  size_t from = sent.size();
+  frame(CanFrame(kHeartbeatId, {0x00}));  // a newcomer's boot-up
+  EXPECT_EQ(with_id(kHeartbeatId, from), (std::vector<CanFrame>{CanFrame(kHeartbeatId, {0x7F})}));
+  EXPECT_EQ(emcys(from).size(), 1u);
+}
+
+TEST_F(NodeIdConflictTest, WithinTheClaimPeriodTheNodeYieldsAndWaitsForLss) {
+  advance_ms(500);
+  size_t from = sent.size();
+  frame(CanFrame(kHeartbeatId, {0x05}));  // a device that was there first
+  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x01, 0x00, 0x00})}));
+  EXPECT_FALSE(node->configured());
+  from = sent.size();
+  advance_ms(3000);
+  frame(CanFrame(kSdoRx, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));
+  EXPECT_TRUE(std::vector<CanFrame>(sent.begin() + static_cast<long>(from), sent.end()).empty())
+      << "no heartbeat, SDO answer or EMCY with a node-ID another device has";
+  // An LSS master gives it another node-ID; it boots with it (CiA 305).
+  frame(lss({0x4C}));  // identify non-configured remote slave
+  EXPECT_EQ(sent.back(), CanFrame(0x7E4, {0x50, 0, 0, 0, 0, 0, 0, 0}));
+  frame(lss({0x04, 0x01}));
+  frame(lss({0x11, 6}));
+  frame(lss({0x04, 0x00}));
+  EXPECT_TRUE(node->configured());
+  EXPECT_EQ(node->node_id(), 6);
+  EXPECT_EQ(with_id(0x706, from).front(), CanFrame(0x706, {0x00}));
+}
+
+TEST_F(NodeIdConflictTest, SdoAnswersAndEmcysOfAnotherDeviceCountRemoteFramesDoNot) {
+  advance_ms(3000);
+  CanFrame guard(kHeartbeatId, {});
+  guard.rtr = true;
+  size_t from = sent.size();
+  frame(guard);  // a node guarding request
+  frame(CanFrame(kSdoRx, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));  // a request to us
+  EXPECT_TRUE(emcys(from).empty());
+  frame(CanFrame(kSdoTx, {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x04, 0x00}));  // somebody's answer as us
+  ASSERT_EQ(emcys(from).size(), 1u);
+  EXPECT_EQ(emcys(from)[0].data[3], 0x85);
+  EXPECT_EQ(emcys(from)[0].data[4], 0x05);
+
+  nmt(0x82);  // reset communication forgets the error
+  advance_ms(3000);
+  from = sent.size();
+  frame(CanFrame(kEmcyId, {0x00, 0x10, 0x01, 0, 0, 0, 0, 0}));  // somebody's EMCY as us
+  ASSERT_EQ(emcys(from).size(), 1u);
+  EXPECT_EQ(emcys(from)[0].data[3], 0x85);
+  EXPECT_EQ(emcys(from)[0].data[4], 0x00);
+}
+
+}  // namespace
+}  // namespace stepnode::node::test
