@@ -10,68 +10,17 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
+using harness::ms;
 
 // One axis on a simulated machine (no encoder, no switches unless a test adds them).
-class AxisCommands : public ::testing::Test {
+class AxisCommands : public harness::AxisHarness {
  protected:
-  static sim::AxisMachineConfig plain() {
-    sim::AxisMachineConfig m;
-    m.encoder = sim::EncoderKind::None;
-    return m;
-  }
-  void build(AxisConfig c = {}, sim::AxisMachineConfig m = plain()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
-    axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
-    now = 0;
-    held = 0;
-    events.clear();
-  }
-  void SetUp() override { build(); }
-
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  // A command: the bit goes on and off again in the same tick (the command acts on the edge).
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void hold(uint16_t bits) {
-    held = bits;
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  void clear() { issue(command::kClearErrors); }
-  void set_position(int32_t p) {
-    axis->words().destination = p;
-    issue(command::kSetPosition);
-  }
-  void move_rel(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveRelative);
-  }
-  void move_abs(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveAbsolute);
-  }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-  int64_t mech() const { return motors[0].position(); }
-
   // Every step until the axis stands still (or `limit` ms pass), with the status after it.
   struct Sample {
     Tick t;
@@ -105,12 +54,6 @@ class AxisCommands : public ::testing::Test {
     return -1;
   }
 
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  std::vector<AxisEvent> events;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 // ---- SPM30 3.1 / STP100 4.2.1: power-up ----------------------------------------------------

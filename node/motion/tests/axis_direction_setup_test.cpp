@@ -10,11 +10,11 @@
 namespace stepnode::motion {
 namespace {
 
-using testing::ms;
+using harness::ms;
 
 constexpr Tick kSetup = 9831;  // 2 ms of the 4.9152 MHz clock, rounded up
 
-class AxisDirectionSetup : public testing::AxisHarness {
+class AxisDirectionSetup : public harness::AxisHarness {
  protected:
   void SetUp() override { fast_base(AxisConfig{}); }
   void fast_base(AxisConfig c) {

@@ -12,7 +12,7 @@
 #include "node/sim/machine.hpp"
 #include "node/sim/tests/estop_switch.hpp"
 
-namespace stepnode::motion::testing {
+namespace stepnode::motion::harness {
 
 constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
 
@@ -89,4 +89,4 @@ class AxisHarness : public ::testing::Test {
   uint16_t held = 0;
 };
 
-}  // namespace stepnode::motion::testing
+}  // namespace stepnode::motion::harness

@@ -9,17 +9,15 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
+using harness::ms;
 
-class AxisIndexed : public ::testing::Test {
+class AxisIndexed : public harness::AxisHarness {
  protected:
   static sim::AxisMachineConfig machine(int64_t index_at = 3000, int64_t width = 10) {
     sim::AxisMachineConfig m;
@@ -27,34 +25,12 @@ class AxisIndexed : public ::testing::Test {
     m.index = sim::Cam{index_at, width};
     return m;
   }
+  // A new axis, its errors cleared.
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
-    now = 0;
-    held = 0;
-    axis->write_commands(command::kClearErrors, now);
-    axis->write_commands(0, now);
+    AxisHarness::build(c, m);
+    clear();
   }
   void SetUp() override { build(); }
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void hold(uint16_t bits) {
-    held = bits;
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-  int64_t mech() const { return motors[0].position(); }
   void indexed(int32_t destination, uint32_t index_destination, uint32_t open, uint32_t close,
                uint16_t index_decel = 0) {
     CommandWords& w = axis->words();
@@ -87,11 +63,6 @@ class AxisIndexed : public ::testing::Test {
     return -1;
   }
 
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 TEST_F(AxisIndexed, Stp100_5_3_5_IndexInsideTheWindowEndsIndexDestinationPastIt) {

@@ -8,9 +8,9 @@
 namespace stepnode::motion {
 namespace {
 
-using testing::ms;
+using harness::ms;
 
-class AxisPositionRange : public testing::AxisHarness {
+class AxisPositionRange : public harness::AxisHarness {
  protected:
   void SetUp() override {
     build();

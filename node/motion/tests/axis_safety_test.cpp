@@ -7,17 +7,15 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
+using harness::ms;
 
-class AxisSafety : public ::testing::Test {
+class AxisSafety : public harness::AxisHarness {
  protected:
   static sim::AxisMachineConfig machine() {
     sim::AxisMachineConfig m;
@@ -27,47 +25,8 @@ class AxisSafety : public ::testing::Test {
     m.home = sim::Cam{10000, 40};  // out of reach of the limits: a home never found
     return m;
   }
-  void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
-    axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
-    now = 0;
-    held = 0;
-    events.clear();
-  }
+  void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) { AxisHarness::build(c, m); }
   void SetUp() override { build(); }
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void hold(uint16_t bits) {
-    held = bits;
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  void clear() { issue(command::kClearErrors); }
-  void set_position(int32_t p) {
-    axis->words().destination = p;
-    issue(command::kSetPosition);
-  }
-  void move_rel(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveRelative);
-  }
-  void move_abs(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveAbsolute);
-  }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-  int64_t mech() const { return motors[0].position(); }
   // Runs to just after the next step (the e-stop or a fault can then come between steps).
   void next_step() {
     auto t = axis->next_step_time();
@@ -82,12 +41,6 @@ class AxisSafety : public ::testing::Test {
     EXPECT_FALSE(axis->next_step_time().has_value());
   }
 
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  std::vector<AxisEvent> events;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 // ---- end limits: SPM30 3.1/3.3.1, STP100 4.2.1 ----------------------------------------------
