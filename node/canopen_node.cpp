@@ -103,6 +103,7 @@ CanopenNode::~CanopenNode() = default;
 
 void CanopenNode::install_service_hooks() {
   od::Dictionary& od = dictionary_;
+  emcy_cob_id_ = &od.at(0x1014, 0);  // entries stay where they are: the dictionary is built once
   // Store/restore: the signature check of the dictionary comes first, then the file.
   for (const auto& group : od::kParameterGroups) {
     // The signature was checked by the entry's validate (a wrong one is 0x08000020); the
@@ -317,7 +318,7 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
     return;
   }
   if (!configured()) return;
-  if (auto conflict = conflict_.on_frame(frame, dictionary_.get<uint32_t>(0x1014, 0), now_us)) {
+  if (auto conflict = conflict_.on_frame(frame, od::decode<uint32_t>(emcy_cob_id_->value), now_us)) {
     node_id_conflict(*conflict, now_us);
     return;
   }

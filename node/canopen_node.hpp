@@ -114,6 +114,8 @@ class CanopenNode {
   SdoServerChannels sdo_;  // 0x1200..0x1203
   LssSlave lss_;
   NodeIdConflict conflict_;
+  // 0x1014, looked at for every frame (the conflict check): the entry, not a lookup.
+  const od::Entry* emcy_cob_id_ = nullptr;
   NmtState state_ = NmtState::Initialising;
   bool booted_ = false;  // the application was powered up (the first boot with a node-ID)
   struct PowerUpError {
