@@ -103,6 +103,15 @@ def master(bus):
 
 
 @pytest.fixture
+def stepctl_bin() -> Path:
+    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
+    p = p if p.is_absolute() else REPO_ROOT / p
+    if not (p.is_file() and os.access(p, os.X_OK)):
+        pytest.skip(f"stepctl not found at {p}: build with -DSTEPNODE_BUILD_TOOLS=ON or set STEPCTL_BIN")
+    return p
+
+
+@pytest.fixture
 def stepnode_bin() -> Path:
     p = stepnode_path()
     if not (p.is_file() and os.access(p, os.X_OK)):

@@ -4,10 +4,8 @@
 the motor has stopped), the interrupt example of 3-16 (three BEEPs: after the MOVE, at
 1000 Hz, at HALT SGL) and the WIDTH interrupt example of 3-28 (two: at 2 ms, at HALT SGL)."""
 
-import os
 import subprocess
 import time
-from pathlib import Path
 
 import pytest
 
@@ -18,11 +16,8 @@ EXAMPLES = REPO_ROOT / "examples" / "hp44714a"
 
 
 @pytest.fixture
-def stepctl(tmp_path):
-    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not (p.is_file() and os.access(p, os.X_OK)):
-        pytest.skip(f"stepctl not found at {p}: set STEPCTL_BIN")
+def stepctl(stepctl_bin, tmp_path):
+    p = stepctl_bin
 
     def run(*args, timeout=60):
         return subprocess.run([str(p), "--iface", CHANNEL, *map(str, args)], capture_output=True, text=True,

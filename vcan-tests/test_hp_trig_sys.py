@@ -6,15 +6,12 @@ triggered it (0x2n1E:1); the first steps fall within one engine tick (the node's
 of each other, and each one's offset from its trigger is the profile's (same on every axis).
 The simulated machines (0x5n03) show the steps were taken, and none before the SYNC."""
 
-import os
-import struct
 import subprocess
 import time
-from pathlib import Path
 
 import pytest
 
-from conftest import CHANNEL, REPO_ROOT
+from conftest import CHANNEL
 
 A, B = 5, 6
 TICK_US = 1000
@@ -22,11 +19,8 @@ AXES = [(A, 0), (A, 1), (B, 0)]  # (node, HP channel)
 
 
 @pytest.fixture
-def stepctl(tmp_path):
-    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not (p.is_file() and os.access(p, os.X_OK)):
-        pytest.skip(f"stepctl not found at {p}: set STEPCTL_BIN")
+def stepctl(stepctl_bin, tmp_path):
+    p = stepctl_bin
 
     def run(*args, timeout=30):
         r = subprocess.run([str(p), "--iface", CHANNEL, *map(str, args)], capture_output=True, text=True,

@@ -11,23 +11,13 @@ import re
 import subprocess
 import threading
 import time
-from pathlib import Path
 
 import pytest
 
 from canopen_master import STATE_OPERATIONAL, STATE_PREOPERATIONAL, STATE_STOPPED
-from conftest import CHANNEL, REPO_ROOT
+from conftest import CHANNEL
 
 NODE = 5
-
-
-@pytest.fixture
-def stepctl_bin():
-    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not (p.is_file() and os.access(p, os.X_OK)):
-        pytest.skip(f"stepctl not found at {p}: build with -DSTEPNODE_BUILD_TOOLS=ON or set STEPCTL_BIN")
-    return p
 
 
 @pytest.fixture

@@ -6,14 +6,12 @@ statuses and one-line errors.
 Every state and value stepctl reports is checked against the node through the independent
 python master (canopen_master.py): 6041h decoded with CiA 402-2's state coding masks."""
 
-import os
 import subprocess
 import time
-from pathlib import Path
 
 import pytest
 
-from conftest import CHANNEL, REPO_ROOT
+from conftest import CHANNEL
 
 NODE = 42
 STATUSWORD, CONTROLWORD, MODES_DISPLAY, ERROR_CODE = 0x6041, 0x6040, 0x6061, 0x603F
@@ -32,11 +30,8 @@ def state_of(sw):
 
 
 @pytest.fixture
-def stepctl(tmp_path):
-    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not (p.is_file() and os.access(p, os.X_OK)):
-        pytest.skip(f"stepctl not found at {p}: build with -DSTEPNODE_BUILD_TOOLS=ON or set STEPCTL_BIN")
+def stepctl(stepctl_bin, tmp_path):
+    p = stepctl_bin
 
     def run(*args, timeout=60):
         return subprocess.run([str(p), "--iface", CHANNEL, *map(str, args)], capture_output=True, text=True,

@@ -4,28 +4,17 @@ service (8 bytes: the command specifier, 32-bit values little-endian in bytes 1.
 unused bytes 0), recorded by a socket of the test's own; the slave's state is checked
 through the independent master (lss_master.py, canopen_master.py)."""
 
-import os
 import struct
 import subprocess
 import time
-from pathlib import Path
 
 import pytest
 
-from conftest import BOOT_TIMEOUT, CHANNEL, REPO_ROOT, collect_frames, open_bus
+from conftest import CHANNEL, REPO_ROOT, collect_frames, open_bus
 from lss_master import LssMaster
 from test_lss import PRODUCT, REVISION, VENDOR, start_unconfigured, wait_unconfigured
 
 NODE = 0x2D
-
-
-@pytest.fixture
-def stepctl_bin():
-    p = Path(os.environ.get("STEPCTL_BIN", "build/tools/stepctl"))
-    p = p if p.is_absolute() else REPO_ROOT / p
-    if not (p.is_file() and os.access(p, os.X_OK)):
-        pytest.skip(f"stepctl not found at {p}: build with -DSTEPNODE_BUILD_TOOLS=ON or set STEPCTL_BIN")
-    return p
 
 
 @pytest.fixture
