@@ -187,6 +187,10 @@ class Axis final : public FrontEnd, public AxisListener {
   bool index_was_active_ = false;
   bool waiting_for_limit_release_ = false;
   int64_t repeat_distance_ = 0;
+  // A jog far from the bound of the positions runs without an end (no distance to count
+  // per step); at this position, closer to the bound than its ramp down, it is given its
+  // end on the bound (after_step).
+  std::optional<int32_t> jog_end_from_;
   HomeStage home_stage_ = HomeStage::Seek;
   std::optional<Tick> origin_inactive_since_;
   bool origin_seen_inactive_ = false;

@@ -162,7 +162,15 @@ void Axis::jog(int direction, Tick now) {
   if (to_bound <= 0) return latch(status::kIllegalMove, now);
   job_ = Job::Jog;
   move_ramp_ = *ramp;
-  start_motion(*ramp, direction, to_bound, now);
+  const int64_t ramp_down = static_cast<int64_t>(ramp->decel_phase(ramp->run_level) / ramp->phase_per_step) + 2;
+  jog_end_from_.reset();
+  if (to_bound <= ramp_down) {
+    start_motion(*ramp, direction, to_bound, now);
+    return;
+  }
+  const int64_t bound = direction > 0 ? kPositionMax : kPositionMin;
+  jog_end_from_ = static_cast<int32_t>(bound - direction * ramp_down);
+  start_motion(*ramp, direction, std::nullopt, now);
 }
 
 bool Axis::ends_in_range(int64_t distance, bool indexed) const {

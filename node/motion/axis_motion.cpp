@@ -1,5 +1,7 @@
 // The Horner front end on the motion core: what each step does to the job (limits, stall,
 // position check, the index window, the homing stages) and how a job ends (repeat, resume).
+#include <cstdlib>
+
 #include "node/motion/axis.hpp"
 
 namespace stepnode::motion {
@@ -48,6 +50,11 @@ void Axis::after_step(const Step& step) {
   if (errors_ & status::kMotorStalled) return;
   check_position_valid();
   if (job_ == Job::Home) return home_event(t);
+  if (job_ == Job::Jog && core_.position() == jog_end_from_) {
+    const int64_t bound = step.direction > 0 ? kPositionMax : kPositionMin;
+    core_.retarget(t, std::llabs(bound - core_.position()), move_ramp_);
+    jog_end_from_.reset();
+  }
   if (job_ == Job::Move && move_indexed_ && !index_taken_) {
     // STP113 C1.3.4 / STP100 5.3.5: the index input counts only inside the window, which
     // opens at the running velocity and closes at the deceleration point. "The motor must

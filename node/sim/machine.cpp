@@ -54,7 +54,7 @@ void AxisMachine::move(motion::Tick time, int direction, uint32_t width_ns) {  /
   ++pulses_;
   last_step_time_ = clock_ = time;  // steps come in time order, each after the last flush
   last_width_ns_ = width_ns;
-  if (trace_ || pulse_trace_) [[unlikely]] record(time, direction, width_ns);
+  if (tracing_) [[unlikely]] record(time, direction, width_ns);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping

@@ -120,9 +120,15 @@ class AxisMachine : public motion::MotorPort {
   uint32_t last_pulse_width_ns() const { return last_width_ns_; }
   // Appends every step pulse received from now on to `trace` (nullptr: stop). The golden
   // step-train test records the engine's output through this.
-  void trace_into(std::vector<TracedStep>* trace) { trace_ = trace; }
+  void trace_into(std::vector<TracedStep>* trace) {
+    trace_ = trace;
+    tracing_ = trace_ || pulse_trace_;
+  }
   // The same with each pulse's width (the outputs as a scope would see them).
-  void trace_pulses_into(std::vector<TracedPulse>* trace) { pulse_trace_ = trace; }
+  void trace_pulses_into(std::vector<TracedPulse>* trace) {
+    pulse_trace_ = trace;
+    tracing_ = trace_ || pulse_trace_;
+  }
   motion::Tick last_step_time() const { return last_step_time_; }
 
   // The configuration; changing it through here is a change of the inputs from outside.
@@ -145,6 +151,7 @@ class AxisMachine : public motion::MotorPort {
   motion::StepQueue steps_;
   std::vector<TracedStep>* trace_ = nullptr;
   std::vector<TracedPulse>* pulse_trace_ = nullptr;
+  bool tracing_ = false;  // either trace: one test per step
   // The widths of the queued pulses that have one, in time order (a step without a width
   // costs nothing here), and the width of the last pulse that went out.
   struct QueuedWidth {
