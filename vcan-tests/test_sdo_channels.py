@@ -16,7 +16,7 @@ import pytest
 from bridge_helpers import node_line, stepbridge_bin, start_bridge, domain, stepwatch_bin, wait_for_snapshot  # noqa: F401
 from canopen_master import SdoAbort
 from conftest import wait_for_frame
-from test_stepctl import stepctl, stepctl_bin  # noqa: F401
+from test_stepctl import stepctl  # noqa: F401 (stepctl_bin is in conftest.py)
 
 NODE = 5
 BRIDGE_RX, BRIDGE_TX = 0x690, 0x6D0   # 0x1201
