@@ -5,19 +5,15 @@
 
 #include <algorithm>
 #include <cstdlib>
-#include <memory>
-#include <vector>
 
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
+using harness::ms;
 
-class AxisEncoder : public ::testing::Test {
+class AxisEncoder : public harness::AxisHarness {
  protected:
   // 2000 steps/rev, a 500-line quadrature encoder decoded x4 (SPM30 5.1 "quadrupled"):
   // 2000 counts/rev, MLT/DIV 1/1.
@@ -45,70 +41,25 @@ class AxisEncoder : public ::testing::Test {
     c.stall_detection = stall;
     return c;
   }
+  // The axis with its errors cleared, ready for a command.
   void build(AxisConfig c = config(), sim::AxisMachineConfig m = machine()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
-    axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
-    now = 0;
-    held = 0;
-    events.clear();
-    axis->write_commands(command::kClearErrors, now);
-    axis->write_commands(0, now);
+    AxisHarness::build(c, m);
+    clear();
   }
   void SetUp() override { build(); }
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void hold(uint16_t bits) {
-    held = bits;
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  void set_position(int32_t p) {
-    axis->words().destination = p;
-    issue(command::kSetPosition);
-  }
-  void move_rel(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveRelative);
-  }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-  int64_t mech() const { return motors[0].position(); }
-  // Step by step to standstill; `check` after every step.
-  template <class F>
-  void walk(F check, double limit = 600000) {
-    Tick end = now + ms(limit);
-    while (now < end && any(status::kMoving)) {
-      auto next = axis->next_step_time();
-      at(next ? std::min(*next, end) : std::min(now + ms(0.1), end));
-      check();
-    }
-  }
+  using AxisHarness::walk;
   void walk() {
     walk([] {});
   }
   // The largest |motor - encoder| over a walk.
   int64_t walk_max_error() {
     int64_t worst = 0;
-    walk([&] { worst = std::max<int64_t>(worst, std::llabs(int64_t{axis->motor_position()} - axis->encoder_position())); });
+    walk([&] {
+      worst = std::max<int64_t>(
+          worst, std::llabs(int64_t{axis->motor_position()} - axis->encoder_position()));
+    });
     return worst;
   }
-
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  std::vector<AxisEvent> events;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 // ---- SPM30 5.2/5.3, STP100 6.3.1: the step-to-feedback ratio -------------------------------

@@ -24,11 +24,18 @@ class AxisHarness : public ::testing::Test {
     m.encoder = sim::EncoderKind::None;
     return m;
   }
-  // A new axis at power-up (%I8 on: `clear()` before a command acts).
-  void build(AxisConfig c = {}, sim::AxisMachineConfig m = plain()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
+  // A new axis at power-up (%I8 on: `clear()` before a command acts), driving the first
+  // `ports` of `machines` simulated motors (an SPM30 multiplexed axis drives three); the
+  // e-stop input is wired to every motor.
+  void build(AxisConfig c = {}, sim::AxisMachineConfig m = plain(), unsigned ports = 1,
+             unsigned machines = 0) {
+    motors.assign(std::max(ports, machines), sim::AxisMachine(m));
+    std::vector<sim::AxisMachine*> wired;
+    std::vector<MotorPort*> driven;
+    for (auto& motor : motors) wired.push_back(&motor);
+    for (unsigned i = 0; i < ports; ++i) driven.push_back(&motors[i]);
+    estop.wire(wired);
+    axis = std::make_unique<Axis>(c, driven);
     axis->on_event = [this](const AxisEvent& e) { events.push_back(e); };
     now = 0;
     held = 0;
@@ -67,6 +74,16 @@ class AxisHarness : public ::testing::Test {
   bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
   uint16_t errors() const { return axis->status() & status::kErrors; }
   int64_t mech() const { return motors[0].position(); }
+  // Step by step until the axis stands still (or `limit` ms pass); `check` after each step.
+  template <class F>
+  void walk(F check, double limit = 600000) {
+    Tick end = now + ms(limit);
+    while (now < end && any(status::kMoving)) {
+      auto next = axis->next_step_time();
+      at(next ? std::min(*next, end) : std::min(now + ms(0.1), end));
+      check();
+    }
+  }
   // Every step until the axis stands still (or `limit` ms pass): the time of each.
   std::vector<Tick> walk_steps(double limit = 120000) {
     std::vector<Tick> steps;

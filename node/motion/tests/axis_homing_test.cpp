@@ -4,19 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <memory>
 #include <vector>
 
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
+using harness::ms;
 
-class AxisHoming : public ::testing::Test {
+class AxisHoming : public harness::AxisHarness {
  protected:
   static sim::AxisMachineConfig machine() {
     sim::AxisMachineConfig m;
@@ -26,30 +23,12 @@ class AxisHoming : public ::testing::Test {
     m.upper_limit = 20000;
     return m;
   }
+  // The axis with its errors cleared, ready for a command.
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine()) {
-    motors.assign(1, sim::AxisMachine(m));
-    estop.wire({&motors[0]});
-    axis = std::make_unique<Axis>(c, std::vector<MotorPort*>{&motors[0]});
-    now = 0;
-    held = 0;
-    axis->write_commands(command::kClearErrors, now);
-    axis->write_commands(0, now);
+    AxisHarness::build(c, m);
+    clear();
   }
   void SetUp() override { build(); }
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-  int64_t mech() const { return motors[0].position(); }
   void home(uint16_t bit, int32_t destination) {
     axis->words().destination = destination;
     issue(bit);
@@ -97,11 +76,6 @@ class AxisHoming : public ::testing::Test {
     EXPECT_EQ(axis->encoder_position(), destination);
   }
 
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 // Steps 1-7 from below the cam, searching up: fast to the cam, back off at base velocity

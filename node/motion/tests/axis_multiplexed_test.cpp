@@ -4,20 +4,12 @@
 // encoder belongs to axis 1 whatever is selected. Single-motor axes ignore %Q2/%Q3.
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <memory>
-#include <vector>
-
-#include "node/motion/axis.hpp"
-#include "node/sim/machine.hpp"
-#include "node/sim/tests/estop_switch.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-constexpr Tick ms(double v) { return static_cast<Tick>(v * kClockHz / 1000.0); }
-
-class AxisMultiplexed : public ::testing::Test {
+class AxisMultiplexed : public harness::AxisHarness {
  protected:
   static sim::AxisMachineConfig machine() {
     sim::AxisMachineConfig m;
@@ -27,55 +19,18 @@ class AxisMultiplexed : public ::testing::Test {
     m.upper_limit = 20000;
     return m;
   }
+  // Three motors on the bench; the axis drives `count` of them (1: a single-motor axis).
   void build(AxisConfig c = {}, sim::AxisMachineConfig m = machine(), unsigned count = 3) {
-    motors.assign(3, sim::AxisMachine(m));
-    std::vector<MotorPort*> ports;
-    for (unsigned i = 0; i < count; ++i) ports.push_back(&motors[i]);
-    estop.wire({&motors[0], &motors[1], &motors[2]});
-    axis = std::make_unique<Axis>(c, ports);
-    now = 0;
-    held = 0;
-    axis->write_commands(command::kClearErrors, now);
-    axis->write_commands(0, now);
+    AxisHarness::build(c, m, count, 3);
+    clear();
   }
   void SetUp() override { build(); }
-  void write(uint16_t bits) { axis->write_commands(bits, now); }
-  void issue(uint16_t bits) {
-    write(static_cast<uint16_t>(held | bits));
-    write(held);
-  }
-  void hold(uint16_t bits) {
-    held = bits;
-    write(held);
-  }
-  void at(Tick t) {
-    now = std::max(now, t);
-    axis->advance_to(now);
-  }
-  void wait(double milliseconds) { at(now + ms(milliseconds)); }
-  void set_position(int32_t p) {
-    axis->words().destination = p;
-    issue(command::kSetPosition);
-  }
-  void move_rel(int32_t d) {
-    axis->words().destination = d;
-    issue(command::kMoveRelative);
-  }
   void select(unsigned n) {
     issue(n == 1 ? command::kSelectAxis1 : n == 2 ? command::kSelectAxis2 : command::kSelectAxis3);
   }
   void finish() {
     for (int i = 0; i < 600 && any(status::kMoving); ++i) wait(100);
   }
-  bool has(uint16_t bits) const { return (axis->status() & bits) == bits; }
-  bool any(uint16_t bits) const { return (axis->status() & bits) != 0; }
-  uint16_t errors() const { return axis->status() & status::kErrors; }
-
-  std::vector<sim::AxisMachine> motors;
-  sim::EStopSwitch estop;
-  std::unique_ptr<Axis> axis;
-  Tick now = 0;
-  uint16_t held = 0;
 };
 
 TEST_F(AxisMultiplexed, Spm30_3_1_SelectionBitsShowTheSelectedAxis) {
