@@ -53,7 +53,7 @@ class EmcyProducer {
               uint64_t now_us = 0);
   // Clears a condition; when none is left active, EMCY 0x0000 ("error reset") goes out.
   void clear(uint16_t code, uint64_t now_us = 0);
-  bool active(uint16_t code) const { return active_.count(code) != 0; }
+  bool active(uint16_t code) const { return active_.contains(code); }
   uint8_t error_register() const;
 
   // Sending is allowed only in pre-operational and operational; queued messages wait.

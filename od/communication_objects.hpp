@@ -19,7 +19,7 @@ struct DeviceInfo {
   uint32_t product_code = 0x53544550;  // "STEP"
   uint32_t revision = 0x00010000;      // major 1, minor 0
   uint32_t serial_number = 0;
-  std::string description = "";  // one line for the EDS comments (the profiles and axes)
+  std::string description{};  // one line for the EDS comments (the profiles and axes)
 };
 
 constexpr unsigned kHeartbeatConsumers = 4;
@@ -51,17 +51,17 @@ constexpr ParameterGroup kParameterGroups[] = {
 constexpr uint32_t kSaveSignature = 0x65766173;  // "save", little-endian
 constexpr uint32_t kLoadSignature = 0x64616F6C;  // "load"
 
-// Fills `dictionary` with the communication objects of a device with `pdos` RPDOs and as
+// Fills `od` with the communication objects of a device with `pdos` RPDOs and as
 // many TPDOs (their mappings empty: the profiles give the defaults), with the CiA 301
 // consistency rules (PDO COB-ID/mapping procedure, SYNC/EMCY COB-ID rules, heartbeat
 // consumer duplicates) installed as validate hooks. Services add their reactions on top.
-void build_communication_objects(Dictionary& dictionary, const DeviceInfo& info, unsigned pdos);
+void build_communication_objects(Dictionary& od, const DeviceInfo& info, unsigned pdos);
 
 // A new node-ID for the defaults that follow it (those whose EDS default is
 // "$NODEID+0x...": the EMCY, SDO and first four PDO COB-IDs). Only the default values
 // change: the node puts defaults and stored values back at its next reset communication,
 // which is when CiA 301 7.3.2.2.1 says a new node-ID takes effect.
-void apply_node_id(Dictionary& dictionary, uint8_t node_id);
+void apply_node_id(Dictionary& od, uint8_t node_id);
 
 // True for identifiers CiA 301 7.3.5 reserves (never usable for a PDO, SYNC or EMCY).
 bool is_restricted_can_id(uint32_t can_id);

@@ -87,7 +87,7 @@ Entry& Dictionary::at(uint16_t index, uint8_t sub) {
 SdoAbort Dictionary::locate(uint16_t index, uint8_t sub) const {
   const Object* obj = object(index);
   if (!obj) return SdoAbort::NoObject;
-  if (!obj->entries.count(sub)) return SdoAbort::NoSubindex;
+  if (!obj->entries.contains(sub)) return SdoAbort::NoSubindex;
   return SdoAbort::None;
 }
 

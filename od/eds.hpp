@@ -12,7 +12,7 @@
 
 namespace stepnode::od {
 
-std::string write_eds(const Dictionary& dictionary, const DeviceInfo& info);
+std::string write_eds(const Dictionary& od, const DeviceInfo& info);
 
 // What an EDS says about one sub-entry.
 struct EdsEntry {

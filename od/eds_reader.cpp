@@ -133,7 +133,7 @@ EdsFile parse_eds(std::string_view text) {
     e.name = key(values, "ParameterName", name, lines);
     if (sub >= 0) {
       auto parent = eds.sections.find(name.substr(0, 4));
-      if (parent != eds.sections.end() && parent->second.count("parametername"))
+      if (parent != eds.sections.end() && parent->second.contains("parametername"))
         e.name = parent->second.at("parametername") + " / " + e.name;
     }
     unsigned long type = number(type_it->second, lines.of(name, "datatype"), "[" + name + "] DataType");

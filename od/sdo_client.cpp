@@ -88,7 +88,7 @@ struct SdoClient::State {
   void begin(uint16_t index, uint8_t sub, uint64_t now_us, std::vector<CanFrame>& out);
   void finish(Bytes data = {});
   void fail(SdoAbort code, std::vector<CanFrame>& out);
-  void send(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out);
+  void send(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) const;
   bool same_object(const CanFrame& f) const {
     return frame_index(f) == t.index && frame_sub(f) == t.sub;
   }
@@ -98,7 +98,7 @@ struct SdoClient::State {
   void send_download_segment(std::vector<CanFrame>& out);
   void upload_initiate_response(const CanFrame& f, std::vector<CanFrame>& out);
   void upload_segment(const CanFrame& f, std::vector<CanFrame>& out);
-  void request_segment(std::vector<CanFrame>& out);
+  void request_segment(std::vector<CanFrame>& out) const;
   void block_download_ack(const CanFrame& f, std::vector<CanFrame>& out);
   void block_upload_initiate_response(const CanFrame& f, uint64_t now_us,
                                       std::vector<CanFrame>& out);
@@ -195,7 +195,7 @@ void SdoClient::State::fail(SdoAbort code, std::vector<CanFrame>& out) {
   t = Transfer{};
 }
 
-void SdoClient::State::send(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) {
+void SdoClient::State::send(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) const {
   out.push_back(frame(client.request_cob_id_, byte0, t.index, t.sub, value));
 }
 
@@ -326,7 +326,7 @@ void SdoClient::State::upload_segment(const CanFrame& f, std::vector<CanFrame>& 
 }
 
 // 7.2.4.3.7: only the command byte; bytes 1..7 are reserved.
-void SdoClient::State::request_segment(std::vector<CanFrame>& out) {
+void SdoClient::State::request_segment(std::vector<CanFrame>& out) const {
   const auto byte0 = static_cast<uint8_t>(cmd_byte(ccs::kUploadSegment) | (t.toggle ? kToggle : 0));
   out.push_back(raw_frame(client.request_cob_id_, byte0, nullptr, 0));
 }

@@ -68,7 +68,7 @@ constexpr uint8_t kAbortByte = 0x80;
 
 // Largest object a transfer will buffer when neither the entry nor the peer bounds it:
 // stops a peer that never sets the c bit from growing memory without limit.
-constexpr size_t kMaxTransferBytes = 16 * 1024 * 1024;
+constexpr size_t kMaxTransferBytes = size_t{16} * 1024 * 1024;
 
 // A DLC 8 frame: byte 0, the multiplexer (index, sub) and the 4-byte data field.
 inline CanFrame frame(uint32_t cob_id, uint8_t byte0, uint16_t index, uint8_t sub,

@@ -77,7 +77,7 @@ struct SdoServer::State {
   void end() { t = Transfer{}; }
   void fail(SdoAbort code, std::vector<CanFrame>& out);
   void reject(const CanFrame& req, SdoAbort code, std::vector<CanFrame>& out);
-  void respond(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out);
+  void respond(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) const;
   SdoAbort accept_size(const Entry& entry, bool indicated, uint32_t size);
 
   void download_initiate(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out);
@@ -190,7 +190,7 @@ void SdoServer::State::reject(const CanFrame& req, SdoAbort code, std::vector<Ca
   fail(code, out);
 }
 
-void SdoServer::State::respond(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) {
+void SdoServer::State::respond(uint8_t byte0, uint32_t value, std::vector<CanFrame>& out) const {
   out.push_back(frame(server.tx_cob_id_, byte0, t.index, t.sub, value));
 }
 

@@ -20,7 +20,7 @@ constexpr uint8_t kClientNodeId = 3;         // node-ID of the SDO client (0x120
 // Adds 0x1200 and 0x1201..0x1203. The extra channels start disabled (both COB-IDs with bit
 // 31 set) and are rw, so 0x1010 stores them; a COB-ID change while it is valid is refused
 // (set bit 31 first), as for PDOs.
-void add_sdo_server_parameters(Dictionary& dictionary, uint8_t node_id);
+void add_sdo_server_parameters(Dictionary& od, uint8_t node_id);
 
 // One channel's COB-IDs as the dictionary holds them now.
 struct SdoChannelIds {
@@ -28,6 +28,6 @@ struct SdoChannelIds {
   uint32_t tx = 0;  // server -> client CAN-ID
   bool valid = false;  // both COB-IDs valid (bit 31 clear)
 };
-SdoChannelIds sdo_channel_ids(const Dictionary& dictionary, unsigned channel);
+SdoChannelIds sdo_channel_ids(const Dictionary& od, unsigned channel);
 
 }  // namespace stepnode::od

@@ -146,7 +146,7 @@ class AxisCore {
   }
   // The running motion's velocity and grid (HP SUSTAIN) and end point (indexed move).
   void change_velocity(Tick at, int64_t level, std::optional<RampSpec> then = std::nullopt) {
-    generator_.change_velocity(at, level, std::move(then));
+    generator_.change_velocity(at, level, then);
     replan(at);
   }
   void regrid(Tick at, const RampSpec& ramp) {

@@ -62,7 +62,7 @@ class Channel final : public FrontEnd, public AxisListener {
   void chan0_triggered(Tick now);  // channel 0 of this node was triggered: TRIG CHAN0
   void set_test_jumper(bool set) { test_jumper_ = set; }
   // Starts what is due (DELAY, STANDBY AUTO power-off) and brings the axis to `now`.
-  void advance(Tick now);
+  void advance_to(Tick now);
 
   // ---- what the master reads
   Done done() const;

@@ -159,7 +159,7 @@ void Channel::check_sustain_reached(Tick at) {
   }
 }
 
-void Channel::advance(Tick now) {
+void Channel::advance_to(Tick now) {
   if (start_at_ && *start_at_ <= now) start(*start_at_);
   width_advance(now);
   core_.advance_to(now);

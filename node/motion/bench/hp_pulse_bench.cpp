@@ -52,11 +52,11 @@ Row measure(double rate, double slope) {
   ch.profile(hp::Profile{hp::ProfileMode::Freq, 0, 10'000, slope, 1e-6}, now);
   ch.sustain(rate, true, now);
   const Tick step = kClockHz / 100;  // advance 10 ms at a time, as a node tick would
-  while (ch.done() != hp::Done::SustainRunning) ch.advance(now += step);
+  while (ch.done() != hp::Done::SustainRunning) ch.advance_to(now += step);
   // A window of at least 20,000 pulses or 100 s of steady running.
   const size_t want = static_cast<size_t>(std::max(20'000.0, std::min(rate * 100, 200'000.0)));
   motor.recording = true;
-  while (motor.times.size() < want) ch.advance(now += step);
+  while (motor.times.size() < want) ch.advance_to(now += step);
   const auto& t = motor.times;
   const double tick_ns = 1e9 / static_cast<double>(kClockHz);
   const double period_ns = 1e9 / rate;

@@ -44,7 +44,7 @@ class HpChannel : public ::testing::Test {
     Tick end = now + ms(milliseconds);
     while (now < end) {
       now = std::min(end, now + ms(step_ms));
-      ch->advance(now);
+      ch->advance_to(now);
     }
   }
   int64_t position() const { return motor->position(); }

@@ -381,12 +381,12 @@ TEST_F(HpChannel, TrigChan0StartsWithChannel0) {
   ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
   ASSERT_EQ(ch->move(30, false, true, now), Error::None);
   wait(100);
-  ch1.advance(now);
+  ch1.advance_to(now);
   EXPECT_EQ(static_cast<int>(ch1.done()), -3);
   ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
   EXPECT_EQ(*ch1.trigger_time(), *ch->trigger_time());
   wait(2000);
-  ch1.advance(now);
+  ch1.advance_to(now);
   EXPECT_EQ(motor1.position(), 30);
   EXPECT_EQ(*ch1.first_step_time(), *ch->first_step_time());  // same profile, same start
 }
@@ -721,9 +721,9 @@ TEST(HpPulseOutputs, TheMotorGetsTheOutputsAndFollowsTheirDirectionInBothModes) 
       Channel ch(axis.core());
       ch.pulse(PulseSetup{mode, true, ndir_high});
       ASSERT_EQ(ch.move(7, false, true, 0), Error::None);
-      ch.advance(kClockHz);
+      ch.advance_to(kClockHz);
       ASSERT_EQ(ch.move(-3, false, true, kClockHz), Error::None);
-      ch.advance(2 * kClockHz);
+      ch.advance_to(2 * kClockHz);
       ASSERT_EQ(motor.pulses.size(), 10u);
       EXPECT_EQ(motor.position(), 4) << "mode " << int(mode) << " ndir " << ndir_high;
       const OutputPulse& fwd = motor.pulses.front();

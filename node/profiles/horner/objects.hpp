@@ -48,6 +48,6 @@ constexpr unsigned kPdosPerAxis = 4;
 
 // The register objects of `axes` axes, and the default mappings of their PDOs (the PDO
 // objects must exist).
-void add_objects(od::Dictionary& dictionary, unsigned axes);
+void add_objects(od::Dictionary& od, unsigned axes);
 
 }  // namespace stepnode::horner

@@ -73,6 +73,6 @@ const char* emcy_text(uint16_t code);
 
 // The channel objects of `axes` axes and the default mapping of their TPDO 4n+4 (the PDO
 // objects must exist).
-void add_objects(od::Dictionary& dictionary, unsigned axes);
+void add_objects(od::Dictionary& od, unsigned axes);
 
 }  // namespace stepnode::hp44714a

@@ -281,7 +281,7 @@ void HpService::publish(unsigned a) {
 }
 
 void HpService::advance(uint64_t) {
-  for (auto& ch : channels_) ch->advance(now());
+  for (auto& ch : channels_) ch->advance_to(now());
 }
 
 void HpService::publish() {

@@ -42,7 +42,7 @@ class HpService final : public Profile {
   void install_counter_hooks(unsigned a);
   // A reaction on axis a's object `offset`, sub `sub`, publishing the channel after it.
   void hook(unsigned a, uint16_t offset, uint8_t sub, std::function<od::SdoAbort(std::span<const uint8_t>)> f);
-  void apply_stored(unsigned a, motion::Tick now);
+  void apply_stored(unsigned a, motion::Tick t);
   void publish(unsigned a);
   od::SdoAbort result(unsigned a, motion::hp::Error e);
   motion::Tick now() const { return axes_.now(); }

@@ -33,6 +33,6 @@ constexpr uint8_t kStallBelowEnabled = 1, kStallBelow = 2, kStallAboveEnabled = 
 }
 
 // The objects of `motors` simulated motors and the shared e-stop input.
-void add_objects(od::Dictionary& dictionary, unsigned motors);
+void add_objects(od::Dictionary& od, unsigned motors);
 
 }  // namespace stepnode::sim

@@ -18,12 +18,12 @@ void SimService::publish() {
   for (unsigned m = 0; m < machine().axes.size(); ++m) publish_motor(m);
 }
 
-void SimService::load_machine(unsigned a) {  // a: the motor
-  uint16_t sw = sim_obj::index(a, sim_obj::kSwitches), enc = sim_obj::index(a, sim_obj::kEncoder),
-           f = sim_obj::index(a, sim_obj::kFaults);
+void SimService::load_machine(unsigned motor) {
+  uint16_t sw = sim_obj::index(motor, sim_obj::kSwitches), enc = sim_obj::index(motor, sim_obj::kEncoder),
+           f = sim_obj::index(motor, sim_obj::kFaults);
   auto i32 = [&](uint16_t i, uint8_t s) { return int64_t{dictionary_.get<int32_t>(i, s)}; };
   auto on = [&](uint16_t i, uint8_t s) { return dictionary_.get<uint8_t>(i, s) != 0; };
-  sim::AxisMachineConfig& m = machine().axes[a].config();
+  sim::AxisMachineConfig& m = machine().axes[motor].config();
   using namespace sim;
   int64_t home_width = i32(sw, switches_sub::kHomeWidth);
   m.home = home_width > 0 ? std::optional<sim::Cam>(sim::Cam{i32(sw, switches_sub::kHomePosition), home_width})
@@ -67,12 +67,12 @@ void SimService::install_hooks() {
   });
 }
 
-void SimService::publish_motor(unsigned a) {
-  const sim::AxisMachine& m = machine().axes[a];
-  dictionary_.put<int32_t>(sim_obj::index(a, sim_obj::kMechanicalPosition), 0, static_cast<int32_t>(m.position()));
+void SimService::publish_motor(unsigned motor) {
+  const sim::AxisMachine& m = machine().axes[motor];
+  dictionary_.put<int32_t>(sim_obj::index(motor, sim_obj::kMechanicalPosition), 0, static_cast<int32_t>(m.position()));
   uint8_t inputs = (m.home() ? 1 : 0) | (m.lower_limit() ? 2 : 0) | (m.upper_limit() ? 4 : 0) |
                    (m.index() ? 8 : 0) | (m.marker() ? 16 : 0);
-  dictionary_.put<uint8_t>(sim_obj::index(a, sim_obj::kInputs), 0, inputs);
+  dictionary_.put<uint8_t>(sim_obj::index(motor, sim_obj::kInputs), 0, inputs);
 }
 
 }  // namespace stepnode::node

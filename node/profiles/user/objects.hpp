@@ -13,6 +13,6 @@ constexpr uint16_t kRegisters = 0x2F00;  // ARRAY of 8 U32 rw, PDO-mappable
 constexpr uint16_t kData = 0x2F01;       // DOMAIN rw
 constexpr size_t kDataMaxLength = 4096;
 
-void add_objects(od::Dictionary& dictionary);
+void add_objects(od::Dictionary& od);
 
 }  // namespace stepnode::user
