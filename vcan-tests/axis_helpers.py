@@ -487,3 +487,18 @@ def set_position(ax: Axis, value: int) -> None:
 
 
 __all__ = [n for n in dir() if not n.startswith("_")]
+
+
+# ---------------------------------------------------------------- the ramp down from a velocity
+
+
+def ramp_steps_from(calc: Stpcalc, velocity: float) -> float:
+    """The steps a deceleration of `calc` takes from `velocity` (steps/s) down to the base
+    velocity, on the module's quantised ramp (SPM30 appendix B): the velocity falls one unit
+    of 600/%AQ3 pulses/s every Z_D ticks of 4.9152 MHz, so from level L (velocity / unit) to
+    %AQ4 it makes sum(k, k = %AQ4..L) * 600/%AQ3 * Z_D / 4.9152e6 steps -- B1.3.9 with L in
+    place of %AQ5. 0 at or below the base velocity."""
+    level = velocity * calc.aq3 / 600
+    if level <= calc.aq4:
+        return 0.0
+    return (level - calc.aq4) * (level + calc.aq4 + 1) * calc.z_d / (16384 * calc.aq3)
