@@ -47,6 +47,7 @@ int run(const bridge::BridgeConfig& cfg) {
   options.participant.domain = cfg.domain;
   options.participant.profiles_file = cfg.profiles;
   options.participant.name = "stepbridge " + cfg.iface;
+  options.participant.security = cfg.dds_security;
   options.naming.ros2 = cfg.ros2;
   options.naming.ros2_prefix = cfg.ros2_prefix;
   bridge::dds::DdsPublisher publisher(options);
@@ -91,7 +92,8 @@ int run(const bridge::BridgeConfig& cfg) {
   canio::ServiceNotifier notifier;
   if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
 
-  spdlog::info("stepbridge on {}, DDS domain {}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "");
+  spdlog::info("stepbridge on {}, DDS domain {}{}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "",
+               cfg.dds_security.enabled() ? ", DDS Security" : "");
   notifier.status("bridging " + cfg.iface + " to DDS domain " + std::to_string(cfg.domain));
   notifier.ready();
   loop.run();
@@ -125,7 +127,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
   } catch (const std::invalid_argument& e) {
-    // A ROS 2 prefix that is not a valid ROS 2 name (bridge/dds/naming.hpp): bad input.
+    // A ROS 2 prefix that is not a valid ROS 2 name (bridge/dds/naming.hpp), a DDS Security
+    // file that is missing or wrong (bridge/dds/security.hpp): bad input.
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {
