@@ -19,6 +19,7 @@
 
 #include "bridge/config.hpp"
 #include "bridge/dds/publisher.hpp"
+#include "bridge/dds/security.hpp"
 #include "bridge/observer/bus_observer.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/sd_notify.hpp"
@@ -116,6 +117,8 @@ int main(int argc, char** argv) {
     cfg = bridge::parse_bridge_command_line(argc, argv, exit_now, exit_code);
     if (exit_now) return exit_code;
     spdlog::set_level(spdlog::level::from_str(cfg.log_level));
+    // A wrong DDS Security file is bad input like a wrong option: said before the bus is opened.
+    if (cfg.dds_security.enabled()) bridge::dds::check_security_files(cfg.dds_security);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;

@@ -90,6 +90,10 @@ class Watcher {
       if (!topic) throw std::runtime_error("topic " + name + ": Fast DDS could not create it");
       readers_[i] = subscriber_->create_datareader(
           topic, bridge::dds::reader_qos(kind, naming_.ros2, *subscriber_, naming_.ros2 ? 0 : depth[i]));
+      // With DDS Security the usual cause is the permissions: no subscribe grant for the topic.
+      if (!readers_[i] && o.security.enabled())
+        throw std::invalid_argument("topic " + name + ": Fast DDS refused the reader (does dds.security.permissions " +
+                                    o.security.permissions + " grant this identity subscribe?)");
       if (!readers_[i]) throw std::runtime_error("topic " + name + ": Fast DDS refused the reader QoS");
     }
     if (!o.csv.empty()) {
