@@ -80,8 +80,9 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
   uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
   if (file.has("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(file, cfg);
+  cfg.dds_security = dds::load_security_table(file);
   file.refuse_unknown_keys({"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level", "tick_ms",
-                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels"});
+                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels", "dds"});
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge/dds/security.hpp"
 #include "bridge/observer/bus_observer.hpp"
 #include "config/toml_file.hpp"
 
@@ -23,6 +24,8 @@ struct BridgeConfig {
   // SDO server channels of the bridge's own, one per node (--sdo-channel NODE:RX,TX or the
   // [sdo_channels] table); other nodes are read on their default channel, when it is quiet.
   std::vector<NodeSdoChannel> sdo_channels;
+  // [dds.security]: the DDS Security files (README "DDS Security"); only in the config file.
+  dds::SecurityFiles dds_security;
 };
 
 // "5:0x685,0x6C5": node 5's channel, client->server and server->client COB-IDs. Throws

@@ -19,6 +19,7 @@
 
 #include "bridge/config.hpp"
 #include "bridge/dds/publisher.hpp"
+#include "bridge/dds/security.hpp"
 #include "bridge/observer/bus_observer.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/sd_notify.hpp"
@@ -47,6 +48,7 @@ int run(const bridge::BridgeConfig& cfg) {
   options.participant.domain = cfg.domain;
   options.participant.profiles_file = cfg.profiles;
   options.participant.name = "stepbridge " + cfg.iface;
+  options.participant.security = cfg.dds_security;
   options.naming.ros2 = cfg.ros2;
   options.naming.ros2_prefix = cfg.ros2_prefix;
   bridge::dds::DdsPublisher publisher(options);
@@ -91,7 +93,8 @@ int run(const bridge::BridgeConfig& cfg) {
   canio::ServiceNotifier notifier;
   if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
 
-  spdlog::info("stepbridge on {}, DDS domain {}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "");
+  spdlog::info("stepbridge on {}, DDS domain {}{}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "",
+               cfg.dds_security.enabled() ? ", DDS Security" : "");
   notifier.status("bridging " + cfg.iface + " to DDS domain " + std::to_string(cfg.domain));
   notifier.ready();
   loop.run();
@@ -114,6 +117,8 @@ int main(int argc, char** argv) {
     cfg = bridge::parse_bridge_command_line(argc, argv, exit_now, exit_code);
     if (exit_now) return exit_code;
     spdlog::set_level(spdlog::level::from_str(cfg.log_level));
+    // A wrong DDS Security file is bad input like a wrong option: said before the bus is opened.
+    if (cfg.dds_security.enabled()) bridge::dds::check_security_files(cfg.dds_security);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
@@ -125,7 +130,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
   } catch (const std::invalid_argument& e) {
-    // A ROS 2 prefix that is not a valid ROS 2 name (bridge/dds/naming.hpp): bad input.
+    // A ROS 2 prefix that is not a valid ROS 2 name (bridge/dds/naming.hpp), a DDS Security
+    // file that is missing or wrong (bridge/dds/security.hpp): bad input.
     std::fprintf(stderr, "stepbridge: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {

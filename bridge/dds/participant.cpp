@@ -37,7 +37,17 @@ efd::DomainParticipant* create_participant(const ParticipantOptions& options) {
   if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) == ReturnCode_t::RETCODE_OK)
     spdlog::debug("participant QoS from XML profile {}", kParticipantProfile);
   if (qos.name().to_string().empty() || qos.name().to_string() == "RTPSParticipant") qos.name(options.name);
+  if (options.security.enabled()) {
+    check_security_files(options.security);  // a wrong file: one line that names it
+    add_security_properties(options.security, qos);
+  }
   efd::DomainParticipant* participant = factory->create_participant(options.domain, qos);
+  // The files passed the checks, so what is left is their content (a governance or a
+  // grant Fast DDS cannot parse, or that does not let this participant join the domain).
+  if (!participant && options.security.enabled())
+    throw std::invalid_argument("dds.security: Fast DDS refused the participant on domain " +
+                                std::to_string(options.domain) + " (the governance or permissions content; " +
+                                "Fast DDS's log above says which)");
   if (!participant)
     throw std::runtime_error("DDS domain " + std::to_string(options.domain) + ": Fast DDS could not create a participant");
   return participant;

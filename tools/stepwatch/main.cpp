@@ -1,6 +1,6 @@
 // stepwatch: a supervisor-side subscriber to stepbridge's DDS topics.
 //
-//   stepwatch [--domain N] [--ros2 [--ros2-prefix P]] [--profiles FILE.xml]
+//   stepwatch [--domain N] [--ros2 [--ros2-prefix P]] [--profiles FILE.xml] [--security-config FILE.toml]
 //             [--once [--wait-ms MS]] [--json] [--csv FILE] [--count N] [--duration-ms MS]
 //
 // Live (default): a table of every node and axis, redrawn every --interval-ms; with
@@ -31,6 +31,7 @@
 #include "bridge/dds/participant.hpp"
 #include "bridge/dds/publisher.hpp"
 #include "bridge/dds/qos.hpp"
+#include "bridge/dds/security.hpp"
 #include "bridge/dds/types.hpp"
 #include "tools/stepwatch/watch_model.hpp"
 
@@ -50,6 +51,7 @@ struct Options {
   bool ros2 = false;
   std::string ros2_prefix = "stepnode";
   std::string profiles;
+  bridge::dds::SecurityFiles security;  // the [dds.security] table of --security-config
   bool once = false;
   bool json = false;
   std::string csv;
@@ -74,6 +76,7 @@ class Watcher {
     p.domain = o.domain;
     p.profiles_file = o.profiles;
     p.name = "stepwatch";
+    p.security = o.security;
     participant_ = bridge::dds::create_participant(p);
     subscriber_ = participant_->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
     if (!subscriber_) throw std::runtime_error("Fast DDS could not create a subscriber");
@@ -87,6 +90,10 @@ class Watcher {
       if (!topic) throw std::runtime_error("topic " + name + ": Fast DDS could not create it");
       readers_[i] = subscriber_->create_datareader(
           topic, bridge::dds::reader_qos(kind, naming_.ros2, *subscriber_, naming_.ros2 ? 0 : depth[i]));
+      // With DDS Security the usual cause is the permissions: no subscribe grant for the topic.
+      if (!readers_[i] && o.security.enabled())
+        throw std::invalid_argument("topic " + name + ": Fast DDS refused the reader (does dds.security.permissions " +
+                                    o.security.permissions + " grant this identity subscribe?)");
       if (!readers_[i]) throw std::runtime_error("topic " + name + ": Fast DDS refused the reader QoS");
     }
     if (!o.csv.empty()) {
@@ -252,6 +259,9 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   app.add_flag("--ros2", o.ros2, "ROS 2 names (rt/<prefix>/axis_status, stepnode::msg::dds_::AxisStatus_)");
   app.add_option("--ros2-prefix", o.ros2_prefix, "topic prefix in ROS 2 mode (default stepnode)");
   app.add_option("--profiles", o.profiles, "Fast DDS XML profiles file");
+  std::string security_config;
+  app.add_option("--security-config", security_config,
+                 "TOML file with a [dds.security] table (DDS Security, as stepbridge's config; other keys ignored)");
   app.add_flag("--once", o.once, "print the current status of every node and axis and exit");
   app.add_option("--wait-ms", o.wait_ms, "--once: how long to wait for the bridge (default 3000)");
   app.add_flag("--json", o.json, "JSON lines: per node and axis (--once) or per sample (live)");
@@ -279,6 +289,11 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   // A bad argument is status 2; status 1 means "no samples" to a script running --once.
   if (!o.profiles.empty() && !std::filesystem::is_regular_file(o.profiles))
     throw UsageError("profiles " + o.profiles + ": cannot read file");
+  // The bridge's own table and loader: a supervisor's file names the same six keys.
+  if (!security_config.empty()) {
+    o.security = bridge::dds::load_security_table(config::TomlFile(security_config));
+    if (!o.security.enabled()) throw UsageError("security config " + security_config + ": no [dds.security] table");
+  }
   auto level = spdlog::level::from_str(o.log_level);
   if (level == spdlog::level::off && o.log_level != "off") throw UsageError("log level \"" + o.log_level + "\": unknown");
   return o;
