@@ -113,6 +113,15 @@ void Device::life_guarding_recovered(uint64_t now_us) {
   for (auto& p : profiles_) p->master_back(now_us);
 }
 
+void Device::set_receive_filter_sink(FilterSink sink) {
+  filter_sink_ = std::move(sink);
+  if (filter_sink_) filter_sink_(canopen_.receive_filters());
+}
+
+void Device::receive_filters_changed(const std::vector<ReceiveFilter>& filters) {
+  if (filter_sink_) filter_sink_(filters);
+}
+
 bool Device::is_master(uint8_t node) {
   const uint8_t master = canopen_.dictionary().get<uint8_t>(kMasterNodeId, 0);
   return master == 0 || master == node;
