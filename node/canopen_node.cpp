@@ -314,7 +314,24 @@ void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint6
   emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
 }
 
+bool CanopenNode::serves(const od::CanFrame& frame) {
+  const std::vector<ReceiveFilter>& list = receive_filters();
+  if (list.empty()) return true;  // more CAN-IDs than the kernel filters: every frame is routed
+  // The list is sorted and holds each CAN-ID once.
+  auto it = std::lower_bound(list.begin(), list.end(), frame.id,
+                             [](const ReceiveFilter& f, uint32_t id) { return f.id < id; });
+  if (it == list.end() || it->id != frame.id) return false;
+  if (frame.rtr && it->frames == ReceiveFilter::Frames::Data) return false;
+  // Every node hears NMT; a command for another node is not this one's.
+  if (frame.id == od::cob::kNmt) return decode_nmt(frame, configured() ? node_id() : 0).has_value();
+  return true;
+}
+
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
+  // Route first: a frame this node does not serve (another node's, which the kernel
+  // filters let through or a socket without them delivers) costs a lookup, not an advance
+  // of the axes and a tick. A frame it serves advances the application before it acts.
+  if (!serves(frame)) return;
   if (app_ && booted_) app_->advance(now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without

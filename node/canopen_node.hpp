@@ -104,6 +104,8 @@ class CanopenNode {
     send_(frame);
   }
   void update_receive_filters();
+  // Whether a frame is one this node handles: its receive filters, and for NMT the target.
+  bool serves(const od::CanFrame& frame);
 
   // Before options_: the node-ID it holds may be the one the node starts with.
   LssStore lss_store_;
