@@ -332,7 +332,11 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   // filters let through or a socket without them delivers) costs a lookup, not an advance
   // of the axes and a tick. A frame it serves advances the application before it acts.
   if (!serves(frame)) return;
-  if (app_ && booted_) app_->advance(now_us);
+  // A SYNC samples the application at its arrival, not when the process came to it: the
+  // synchronous TPDOs built in its handler then report the instant every node on the bus
+  // saw (the device never advances backwards: after a later tick, that tick's values).
+  const bool sync = !frame.rtr && frame.id == sync_.cob_id() && arrival_us && arrival_us <= now_us;
+  if (app_ && booted_) app_->advance(sync ? arrival_us : now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
     return;

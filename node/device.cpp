@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "node/diagnostic_objects.hpp"
 #include "node/profiles/cia402/service.hpp"
 #include "node/profiles/horner/service.hpp"
@@ -46,6 +48,8 @@ void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arriv
 }
 
 void Device::advance(uint64_t now_us) {
+  // Never backwards: a SYNC is sampled at its arrival, which a tick may already have passed.
+  now_us = std::max(now_us, axes_.now_us());
   axes_.advance(now_us);
   for (auto& p : profiles_) p->advance(now_us);
   axes_.advance(now_us);  // the steps of a job a profile started at or before now
