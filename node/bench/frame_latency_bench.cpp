@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
   b.write(0x1800, 2, {1});  // TPDO1 (axis 1 status and position): synchronous, every SYNC
   b.device.machine().axes.at(0).trace_into(&b.steps);
 
-  Figures sync, rpdo, sdo, foreign;
+  Figures sync, rpdo, first_step, sdo, foreign;
   unsigned first_step_in_handler = 0;
   const auto others = foreign_frames();
   for (unsigned i = 0; i < iterations; ++i) {
@@ -201,9 +201,14 @@ int main(int argc, char** argv) {
     pause_ticking(b, 200);
     // Move Relative by +1 (RPDO1: command bits, destination); the edge acts, then released.
     const size_t before = b.steps.size();
+    const uint64_t frame_us = b.now_us();
     timed(b, ic, od::CanFrame(0x200 + kId, {0x80, 0x00, 1, 0, 0, 0}), 0, rpdo);
     if (b.steps.size() > before) ++first_step_in_handler;
     b.device.on_frame(od::CanFrame(0x200 + kId, {0x00, 0x00, 1, 0, 0, 0}), b.now_us());
+    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;) b.tick();
+    if (b.steps.size() > before)  // the step's own time on the node's clock, after the RPDO was handed over
+      first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -
+                              static_cast<double>(frame_us));
     pause_ticking(b, 200);
     timed(b, ic, od::CanFrame(0x600 + kId, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}), 0x580 + kId, sdo);
     pause_ticking(b, 200);
@@ -212,9 +217,9 @@ int main(int argc, char** argv) {
   std::printf("frame -> frame in-process, %u iterations, device of 3 axes (Horner, HP, user), node %u operational\n",
               iterations, kId);
   print("SYNC -> synchronous TPDO", sync, ic.works());
-  print("RPDO -> first step", rpdo, ic.works());
-  std::printf("%-28s %u of %zu within the RPDO's handler (the rest: a later advance)\n", "  first step", first_step_in_handler,
-              rpdo.us.size());
+  print("RPDO handled (Move Rel +1)", rpdo, ic.works());
+  print("RPDO -> first step's time", first_step, false);  // the module model: DIR setup, first period
+  std::printf("%-28s %u of %zu taken within the RPDO's handler\n", "  first step", first_step_in_handler, rpdo.us.size());
   print("SDO request -> response", sdo, ic.works());
   print("foreign frame (handled)", foreign, ic.works());
   if (!ic.works()) std::printf("instructions: no perf events here; see the callgrind command in the source\n");
