@@ -81,12 +81,22 @@ SocketCan::~SocketCan() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void SocketCan::set_filters(const std::vector<std::pair<uint32_t, uint32_t>>& filters) {
+void SocketCan::set_filters(const std::vector<Filter>& filters) {
   std::vector<can_filter> f;
-  for (auto [id, mask] : filters) f.push_back({id, mask | CAN_EFF_FLAG | CAN_RTR_FLAG});
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.empty() ? nullptr : f.data(),
-                   static_cast<socklen_t>(f.size() * sizeof(can_filter))) != 0)
+  // CAN_EFF_FLAG in the mask with it clear in the id: 11-bit frames only. CAN_RTR_FLAG in
+  // the mask: data frames only. An exact 11-bit data-frame filter (mask 0x7FF with both
+  // flags) is the kernel's fast case, a table lookup by identifier.
+  for (const Filter& x : filters)
+    f.push_back({x.id & CAN_SFF_MASK, (x.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | (x.remote_too ? 0 : CAN_RTR_FLAG)});
+  if (f.empty()) f.push_back({0, 0});  // everything
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.data(), static_cast<socklen_t>(f.size() * sizeof(can_filter))) != 0)
     fail(iface_, "setsockopt CAN_RAW_FILTER");
+}
+
+void SocketCan::set_error_filter(uint32_t classes) {
+  can_err_mask_t mask = classes & CAN_ERR_MASK;
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &mask, sizeof mask) != 0)
+    fail(iface_, "setsockopt CAN_RAW_ERR_FILTER");
 }
 
 std::optional<ReceivedFrame> SocketCan::receive() {

@@ -28,6 +28,14 @@ struct InterfaceError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A kernel receive filter: the 11-bit data frames whose CAN-ID matches `id` in the bits
+// of `mask`, and remote frames too if `remote_too`.
+struct Filter {
+  uint32_t id = 0;
+  uint32_t mask = 0x7FF;
+  bool remote_too = false;
+};
+
 class SocketCan {
  public:
   // Opens and binds a raw socket on `iface`. Throws InterfaceError for an interface that is
@@ -40,8 +48,12 @@ class SocketCan {
 
   int fd() const { return fd_; }
   const std::string& iface() const { return iface_; }
-  // Optional acceptance filters (id, mask); none means everything.
-  void set_filters(const std::vector<std::pair<uint32_t, uint32_t>>& filters);
+  // Kernel acceptance filters (CAN_RAW_FILTER, at most 512); an empty list means every
+  // frame again (to the kernel itself, no filter would mean none). Frames already queued
+  // stay queued. A listed filter passes no extended (29-bit) frame.
+  void set_filters(const std::vector<Filter>& filters);
+  // The error frame classes (CAN_ERR_* bits) the socket receives; all by default.
+  void set_error_filter(uint32_t classes);
 
   // Reads one frame if one is waiting.
   std::optional<ReceivedFrame> receive();

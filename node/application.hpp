@@ -3,8 +3,10 @@
 // (node/device.*) is the application of the real node, and tests give their own.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "node/nmt.hpp"
+#include "node/receive_filters.hpp"
 
 namespace stepnode::node {
 
@@ -31,6 +33,11 @@ class Application {
   virtual void heartbeat_recovered(uint8_t /*node*/, uint64_t /*now_us*/) {}
   // The guarding master's requests are back after a life guarding event.
   virtual void life_guarding_recovered(uint64_t /*now_us*/) {}
+  // The CAN-IDs the node serves changed (a COB-ID written, a new node-ID, a restore): the
+  // socket's kernel filters should become `filters` (node/receive_filters.hpp). Called
+  // before the node sends its next frame, so a master that waits for the SDO answer that
+  // made an RPDO valid finds the filter open when it sends the RPDO.
+  virtual void receive_filters_changed(const std::vector<ReceiveFilter>& /*filters*/) {}
 };
 
 }  // namespace stepnode::node

@@ -129,6 +129,13 @@ void CanopenNode::install_service_hooks() {
     od::listen(e, [this] { consumer_.reconfigure(); });
   for (uint16_t index : {0x1005, 0x1006, 0x1019})
     od::listen(od.at(index, 0), [this] { sync_.reset(0); });
+  // The objects whose values decide which CAN-IDs the node receives.
+  for (auto& [index, obj] : od.objects()) {
+    const bool filtered = index == 0x1005 || index == 0x1012 || index == 0x1014 || index == 0x1016 ||
+                          (index >= 0x1200 && index <= 0x1203) || (index >= 0x1400 && index <= 0x17FF);
+    if (!filtered) continue;
+    for (auto& [sub, e] : od.object(index)->entries) od::listen(e, [this] { filters_dirty_ = true; });
+  }
   // 0x1021: the device's own EDS, generated from this dictionary when read.
   od.at(0x1021, 0).on_read = [this](od::Bytes& v) {
     v = od::encode_string(od::write_eds(dictionary_, options_.device));
@@ -188,6 +195,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
     // A running device that lost its node-ID (0xFF configured over LSS) can no longer be
     // reached by SDO or PDO: the application is told, as for NMT Stopped.
     if (booted_ && app_) app_->state_changed(NmtState::Initialising, now_us);
+    update_receive_filters();  // LSS and NMT only; nothing is sent that would do it
     return;
   }
   if (!booted_) reset_application = true;  // the first boot powers the application up
@@ -200,6 +208,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
     load_parameters(0x1000, 0x1FFF, now_us);
   }
   pdo_.mark_dirty();
+  filters_dirty_ = true;  // stored COB-IDs; the boot-up below goes out with the filters set
   sdo_.reconfigure();  // 0x1201..0x1203 as stored (or configured)
   consumer_.reset();
   guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
@@ -220,6 +229,7 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
 void CanopenNode::adopt_node_id(uint8_t id) {
   spdlog::info("LSS: node-ID {} is now {}", node_id(), id);
   options_.device.node_id = id;
+  filters_dirty_ = true;
   // The COB-IDs that follow the node-ID, and the parameters stored for this one; both
   // reach the dictionary with the reset that follows.
   od::apply_node_id(dictionary_, id);
@@ -304,8 +314,29 @@ void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint6
   emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
 }
 
+bool CanopenNode::serves(const od::CanFrame& frame) {
+  const std::vector<ReceiveFilter>& list = receive_filters();
+  if (list.empty()) return true;  // more CAN-IDs than the kernel filters: every frame is routed
+  // The list is sorted and holds each CAN-ID once.
+  auto it = std::lower_bound(list.begin(), list.end(), frame.id,
+                             [](const ReceiveFilter& f, uint32_t id) { return f.id < id; });
+  if (it == list.end() || it->id != frame.id) return false;
+  if (frame.rtr && it->frames == ReceiveFilter::Frames::Data) return false;
+  // Every node hears NMT; a command for another node is not this one's.
+  if (frame.id == od::cob::kNmt) return decode_nmt(frame, configured() ? node_id() : 0).has_value();
+  return true;
+}
+
 void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us) {
-  if (app_ && booted_) app_->advance(now_us);
+  // Route first: a frame this node does not serve (another node's, which the kernel
+  // filters let through or a socket without them delivers) costs a lookup, not an advance
+  // of the axes and a tick. A frame it serves advances the application before it acts.
+  if (!serves(frame)) return;
+  // A SYNC samples the application at its arrival, not when the process came to it: the
+  // synchronous TPDOs built in its handler then report the instant every node on the bus
+  // saw (the device never advances backwards: after a later tick, that tick's values).
+  const bool sync = !frame.rtr && frame.id == sync_.cob_id() && arrival_us && arrival_us <= now_us;
+  if (app_ && booted_) app_->advance(sync ? arrival_us : now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
     return;
@@ -344,6 +375,7 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
 
 void CanopenNode::on_tick(uint64_t now_us) {
   if (app_ && booted_) app_->advance(now_us);
+  if (filters_dirty_) update_receive_filters();  // a COB-ID the node wrote itself
   consumer_.on_tick(now_us);
   if (state_ == NmtState::Initialising) return;
   guarding_.on_tick(now_us);
@@ -354,6 +386,20 @@ void CanopenNode::on_tick(uint64_t now_us) {
   time_.on_tick(now_us);
   pdo_.on_tick(now_us);
   emcy_.on_tick(now_us);
+}
+
+const std::vector<ReceiveFilter>& CanopenNode::receive_filters() {
+  if (filters_dirty_) update_receive_filters();
+  return filters_;
+}
+
+void CanopenNode::update_receive_filters() {
+  filters_dirty_ = false;
+  std::vector<ReceiveFilter> next = node::receive_filters(dictionary_, node_id(), options_.layout.pdos());
+  if (next == filters_) return;
+  filters_ = std::move(next);
+  spdlog::debug("receive filters: {} CAN-IDs", filters_.size());
+  if (app_) app_->receive_filters_changed(filters_);
 }
 
 void CanopenNode::on_receive_overruns(uint32_t socket_total, uint64_t now_us) {

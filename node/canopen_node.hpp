@@ -18,6 +18,7 @@
 #include "node/node_id_conflict.hpp"
 #include "node/parameter_store.hpp"
 #include "node/pdo_engine.hpp"
+#include "node/receive_filters.hpp"
 #include "node/sdo_server_channels.hpp"
 #include "node/sync.hpp"
 #include "node/time_service.hpp"
@@ -77,6 +78,9 @@ class CanopenNode {
   od::Dictionary& dictionary() { return dictionary_; }
   EmcyProducer& emcy() { return emcy_; }
   const std::filesystem::path& parameter_file() const { return store_.file(); }
+  // The CAN-IDs this node serves now (node/receive_filters.hpp); the application is told
+  // of every change (Application::receive_filters_changed).
+  const std::vector<ReceiveFilter>& receive_filters();
 
   // The profiles behind the dictionary (node/device.* sets it); nullptr: none, a bare
   // CiA 301 slave. Not owned; it outlives the node or is reset first.
@@ -94,7 +98,14 @@ class CanopenNode {
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);
   // A frame of another device with this node-ID (EMCY 0x8100; yield or keep the node-ID).
   void node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us);
-  void send(const od::CanFrame& frame) { send_(frame); }
+  // Every frame leaves through here: the receive filters are brought up to date first.
+  void send(const od::CanFrame& frame) {
+    if (filters_dirty_) update_receive_filters();
+    send_(frame);
+  }
+  void update_receive_filters();
+  // Whether a frame is one this node handles: its receive filters, and for NMT the target.
+  bool serves(const od::CanFrame& frame);
 
   // Before options_: the node-ID it holds may be the one the node starts with.
   LssStore lss_store_;
@@ -124,6 +135,8 @@ class CanopenNode {
   };
   std::vector<PowerUpError> power_up_errors_;
   uint32_t overruns_seen_ = 0;  // the socket's count when last looked at
+  std::vector<ReceiveFilter> filters_;
+  bool filters_dirty_ = true;  // a COB-ID object was written, or the node-ID changed
 };
 
 }  // namespace stepnode::node

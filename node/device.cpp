@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "node/diagnostic_objects.hpp"
 #include "node/profiles/cia402/service.hpp"
 #include "node/profiles/horner/service.hpp"
@@ -46,6 +48,8 @@ void Device::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arriv
 }
 
 void Device::advance(uint64_t now_us) {
+  // Never backwards: a SYNC is sampled at its arrival, which a tick may already have passed.
+  now_us = std::max(now_us, axes_.now_us());
   axes_.advance(now_us);
   for (auto& p : profiles_) p->advance(now_us);
   axes_.advance(now_us);  // the steps of a job a profile started at or before now
@@ -111,6 +115,15 @@ void Device::heartbeat_recovered(uint8_t node, uint64_t now_us) {
 
 void Device::life_guarding_recovered(uint64_t now_us) {
   for (auto& p : profiles_) p->master_back(now_us);
+}
+
+void Device::set_receive_filter_sink(FilterSink sink) {
+  filter_sink_ = std::move(sink);
+  if (filter_sink_) filter_sink_(canopen_.receive_filters());
+}
+
+void Device::receive_filters_changed(const std::vector<ReceiveFilter>& filters) {
+  if (filter_sink_) filter_sink_(filters);
 }
 
 bool Device::is_master(uint8_t node) {

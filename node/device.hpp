@@ -7,6 +7,7 @@
 // harnesses build the node through it and wire nothing themselves.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -43,6 +44,11 @@ class Device final : private Application {
     canopen_.on_receive_overruns(socket_total, now_us);
   }
 
+  // Where the node's kernel receive filters go (node/main.cpp: the socket). Given the
+  // current list at once (before start(): from the defaults), then every change.
+  using FilterSink = std::function<void(const std::vector<ReceiveFilter>&)>;
+  void set_receive_filter_sink(FilterSink sink);
+
   CanopenNode& canopen() { return canopen_; }
   od::Dictionary& dictionary() { return canopen_.dictionary(); }
   AxisBank& axes() { return axes_; }
@@ -58,6 +64,7 @@ class Device final : private Application {
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us) override;
   void heartbeat_recovered(uint8_t node, uint64_t now_us) override;
   void life_guarding_recovered(uint64_t now_us) override;
+  void receive_filters_changed(const std::vector<ReceiveFilter>& filters) override;
 
   // 0x2F11: 0 makes every monitored node a master; otherwise only that node is.
   bool is_master(uint8_t node);
@@ -74,6 +81,7 @@ class Device final : private Application {
   std::vector<std::unique_ptr<Profile>> profiles_;  // called in this order
   uint64_t frame_arrival_us_ = 0;  // the frame being handled (0: none, or unknown)
   bool register_axes_ = true;      // Horner or HP: the register front ends' master-lost rule
+  FilterSink filter_sink_;
 };
 
 }  // namespace stepnode::node

@@ -68,6 +68,20 @@ void report_bit_timing(node::Device& device, const node::NodeConfig& cfg) {
     spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
 }
 
+// The node's filters as the socket takes them; error frames only of the classes the node
+// turns into bus events (a bus with protocol errors would wake it for every one).
+void filter_socket(canio::SocketCan& can, node::Device& device) {
+  can.set_error_filter(CAN_ERR_BUSOFF | CAN_ERR_RESTARTED | CAN_ERR_CRTL);
+  device.set_receive_filter_sink([&can](const std::vector<node::ReceiveFilter>& filters) {
+    std::vector<canio::Filter> out;
+    out.reserve(filters.size());
+    for (const auto& f : filters)
+      out.push_back({f.id, 0x7FF, f.frames == node::ReceiveFilter::Frames::DataAndRemote});
+    can.set_filters(out);
+    spdlog::debug("{}: kernel receive filters for {} CAN-IDs", can.iface(), filters.size());
+  });
+}
+
 uint64_t wall_clock_us() {
   timespec real{};
   clock_gettime(CLOCK_REALTIME, &real);
@@ -78,6 +92,7 @@ int run(node::NodeConfig cfg) {
   canio::SocketCan can(cfg.iface);
   cfg.options.wall_clock = wall_clock_us;  // a TIME producer sends this host's time
   node::Device device(cfg.options, cfg.object_defaults, [&can](const od::CanFrame& f) { can.send(f); });
+  filter_socket(can, device);
 
   canio::EventLoop loop;
   loop.stop_on_signals();

@@ -1,0 +1,227 @@
+// Frame -> frame latency of the node in-process: the real device (node/device.*, as
+// node/main.cpp builds it) handed frames on CLOCK_MONOTONIC, no socket and no vcan.
+//   SYNC -> synchronous TPDO      (TPDO1 of axis 1 made synchronous, type 1)
+//   RPDO -> first step            (RPDO1 of axis 1: Move Relative by one step)
+//   SDO request -> response       (expedited upload of 0x1000 on 0x600+id)
+//   foreign frame                 (frames for another node that reach the process)
+// Prints median and p99 in us and, where the CPU lets a process count them (perf events),
+// the median instructions per frame. Asserts nothing.
+//   build/node/frame_latency_bench [--iterations N]
+//   valgrind --tool=callgrind build/node/frame_latency_bench --foreign-only N   (instructions
+//   per foreign frame: the difference of N and 0, divided by N)
+#include <linux/perf_event.h>
+#include <sys/ioctl.h>
+#include <sys/syscall.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "node/device.hpp"
+#include "node/profiles/horner/bits.hpp"
+#include "node/profiles/horner/objects.hpp"
+#include "node/profiles/sim/objects.hpp"
+
+using namespace stepnode;
+
+namespace {
+
+constexpr uint8_t kId = 5;
+
+uint64_t clock_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
+}
+
+// User-space instructions of this thread (perf events); absent where the CPU or the
+// container gives none.
+class InstructionCounter {
+ public:
+  InstructionCounter() {
+    perf_event_attr a{};
+    a.type = PERF_TYPE_HARDWARE;
+    a.size = sizeof a;
+    a.config = PERF_COUNT_HW_INSTRUCTIONS;
+    a.exclude_kernel = 1;
+    a.exclude_hv = 1;
+    fd_ = static_cast<int>(syscall(SYS_perf_event_open, &a, 0, -1, -1, 0));
+    if (fd_ >= 0) ioctl(fd_, PERF_EVENT_IOC_ENABLE, 0);
+  }
+  ~InstructionCounter() {
+    if (fd_ >= 0) close(fd_);
+  }
+  bool works() const { return fd_ >= 0; }
+  uint64_t read_now() const {
+    uint64_t v = 0;
+    if (fd_ < 0 || ::read(fd_, &v, sizeof v) != sizeof v) return 0;
+    return v;
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+struct Bench {
+  node::Device device;
+  uint32_t watch_id = 0;      // the answer being timed
+  uint64_t answered_ns = 0;   // when it was sent (0: not yet)
+  uint64_t frames_sent = 0;
+  std::vector<sim::TracedStep> steps;
+
+  explicit Bench(const node::NodeOptions& options)
+      : device(options, {}, [this](const od::CanFrame& f) {
+          ++frames_sent;
+          if (f.id == watch_id && !answered_ns) answered_ns = clock_ns();
+        }) {}
+  uint64_t now_us() const { return clock_ns() / 1000; }
+  void tick() { device.on_tick(now_us()); }
+  void write(uint16_t index, uint8_t sub, od::Bytes v) {
+    if (device.dictionary().write(index, sub, v) != od::SdoAbort::None) {
+      std::fprintf(stderr, "write %04X:%02X refused\n", index, sub);
+      std::exit(1);
+    }
+  }
+};
+
+struct Figures {
+  std::vector<double> us;
+  std::vector<uint64_t> instructions;
+};
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+}
+
+// One timed frame: from the device being handed it to the watched answer leaving (or the
+// handler's end when `answer` is 0).
+void timed(Bench& b, const InstructionCounter& ic, const od::CanFrame& f, uint32_t answer, Figures& out) {
+  b.watch_id = answer;
+  b.answered_ns = 0;
+  const uint64_t i0 = ic.read_now();
+  const uint64_t t0 = clock_ns();
+  b.device.on_frame(f, t0 / 1000, t0 / 1000);
+  const uint64_t t1 = answer ? b.answered_ns : clock_ns();
+  const uint64_t i1 = ic.read_now();
+  if (answer && !t1) return;  // no answer this time: not counted
+  out.us.push_back(static_cast<double>(t1 - t0) / 1000.0);
+  out.instructions.push_back(i1 - i0);
+}
+
+void print(const char* what, const Figures& f, bool instructions) {
+  std::vector<double> ins(f.instructions.begin(), f.instructions.end());
+  std::printf("%-28s n=%-6zu median %7.2f us  p99 %7.2f us", what, f.us.size(), percentile(f.us, 0.5),
+              percentile(f.us, 0.99));
+  if (instructions) std::printf("  median %8.0f instructions", percentile(ins, 0.5));
+  std::printf("\n");
+}
+
+void pause_ticking(Bench& b, uint64_t us) {
+  const uint64_t end = b.now_us() + us;
+  while (b.now_us() < end) b.tick();
+}
+
+node::NodeOptions options() {
+  node::NodeOptions o;
+  o.device.node_id = kId;
+  o.layout.axes = 3;
+  o.state_dir = std::filesystem::temp_directory_path() / "stepnode-latency-bench";
+  return o;
+}
+
+void prepare_axis(Bench& b) {
+  using namespace horner::obj;
+  od::Dictionary& od = b.device.dictionary();
+  (void)od;
+  b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
+  b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
+  b.write(index(0, kCommandBits), 0, od::encode<uint16_t>(horner::command::kClearErrors));
+  b.write(index(0, kCommandBits), 0, od::encode<uint16_t>(0));
+}
+
+}  // namespace
+
+namespace {
+
+// Frames for node 6: an NMT command (it passes the kernel filters: every node hears NMT),
+// an SDO request, an RPDO and a heartbeat (in-process only: the filters keep them out of
+// the socket).
+std::vector<od::CanFrame> foreign_frames() {
+  return {od::CanFrame(0x000, {0x80, 6}), od::CanFrame(0x606, {0x40, 0x00, 0x10, 0, 0, 0, 0, 0}),
+          od::CanFrame(0x206, {1, 2, 3, 4, 5, 6}), od::CanFrame(0x706, {0x7F})};
+}
+
+// Deterministic (virtual time, no clock): for callgrind, run with N and with 0.
+int foreign_only(uint64_t n) {
+  Bench b(options());
+  uint64_t t = 1'000'000;
+  b.device.start(t);
+  b.device.on_frame(od::CanFrame(0, {0x01, kId}), t);
+  const auto frames = foreign_frames();
+  for (uint64_t i = 0; i < n; ++i) {
+    t += 10;
+    b.device.on_frame(frames[i % frames.size()], t, t);
+  }
+  std::printf("foreign frames %llu, frames sent %llu\n", static_cast<unsigned long long>(n),
+              static_cast<unsigned long long>(b.frames_sent));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  unsigned iterations = 2000;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--iterations")) iterations = static_cast<unsigned>(std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--foreign-only")) return foreign_only(std::strtoull(argv[i + 1], nullptr, 10));
+  }
+  const InstructionCounter ic;
+  Bench b(options());
+  b.device.start(b.now_us());
+  b.device.on_frame(od::CanFrame(0, {0x01, kId}), b.now_us());  // NMT start
+  prepare_axis(b);
+  b.write(0x1800, 2, {1});  // TPDO1 (axis 1 status and position): synchronous, every SYNC
+  b.device.machine().axes.at(0).trace_into(&b.steps);
+
+  Figures sync, rpdo, first_step, sdo, foreign;
+  unsigned first_step_in_handler = 0;
+  const auto others = foreign_frames();
+  for (unsigned i = 0; i < iterations; ++i) {
+    pause_ticking(b, 200);
+    timed(b, ic, od::CanFrame(0x80, {}), 0x180 + kId, sync);
+    pause_ticking(b, 200);
+    // Move Relative by +1 (RPDO1: command bits, destination); the edge acts, then released.
+    const size_t before = b.steps.size();
+    const uint64_t frame_us = b.now_us();
+    timed(b, ic, od::CanFrame(0x200 + kId, {0x80, 0x00, 1, 0, 0, 0}), 0, rpdo);
+    if (b.steps.size() > before) ++first_step_in_handler;
+    b.device.on_frame(od::CanFrame(0x200 + kId, {0x00, 0x00, 1, 0, 0, 0}), b.now_us());
+    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;) b.tick();
+    if (b.steps.size() > before)  // the step's own time on the node's clock, after the RPDO was handed over
+      first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -
+                              static_cast<double>(frame_us));
+    pause_ticking(b, 200);
+    timed(b, ic, od::CanFrame(0x600 + kId, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}), 0x580 + kId, sdo);
+    pause_ticking(b, 200);
+    timed(b, ic, others[i % others.size()], 0, foreign);
+  }
+  std::printf("frame -> frame in-process, %u iterations, device of 3 axes (Horner, HP, user), node %u operational\n",
+              iterations, kId);
+  print("SYNC -> synchronous TPDO", sync, ic.works());
+  print("RPDO handled (Move Rel +1)", rpdo, ic.works());
+  print("RPDO -> first step's time", first_step, false);  // the module model: DIR setup, first period
+  std::printf("%-28s %u of %zu taken within the RPDO's handler\n", "  first step", first_step_in_handler, rpdo.us.size());
+  print("SDO request -> response", sdo, ic.works());
+  print("foreign frame (handled)", foreign, ic.works());
+  if (!ic.works()) std::printf("instructions: no perf events here; see the callgrind command in the source\n");
+  return 0;
+}
