@@ -201,9 +201,9 @@ std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
       throw UsageError("defaults: " + key + ": " + ex.what());
     }
     if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
-      throw UsageError("defaults: " + key + " = " + text + ": " + std::string(od::abort_text(a)));
+      throw UsageError(std::string("defaults: ").append(key).append(" = ").append(text).append(": ").append(od::abort_text(a)));
     const auto at = static_cast<uint16_t>(index);
-    if ((od::is_rpdo_mapping(at) || od::is_tpdo_mapping(at)) && !built_in.count(at))
+    if ((od::is_rpdo_mapping(at) || od::is_tpdo_mapping(at)) && !built_in.contains(at))
       for (const auto& [sub_index, entry] : od.object(at)->entries) built_in[at][sub_index] = entry.default_value;
     e->default_value = value;
     e->value = value;

@@ -45,7 +45,7 @@ struct RefusedMapping {
 // wrong on its face. A mapping record whose entries each fit but which, as a whole, the
 // device cannot use keeps its built-in default and is returned: the node starts and says
 // so (EMCY 0x6100), as it does for such a stored mapping.
-std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& dictionary,
+std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
                                                   const std::vector<std::pair<std::string, std::string>>& defaults);
 
 }  // namespace stepnode::node

@@ -20,6 +20,6 @@ constexpr uint16_t kMasterNodeId = 0x2F11;
 constexpr uint16_t kNetworkTime = 0x2F12;
 constexpr uint8_t kTimeProducerPeriodSub = 5;
 
-void add_diagnostic_objects(od::Dictionary& dictionary);
+void add_diagnostic_objects(od::Dictionary& od);
 
 }  // namespace stepnode::node

@@ -158,7 +158,7 @@ class Axis final : public FrontEnd, public AxisListener {
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);
-  void select(unsigned motor, Tick now);
+  void select(unsigned index, Tick now);
 
   AxisConfig config_;
   std::unique_ptr<AxisCore> own_core_;  // only for an axis on a core of its own

@@ -5,7 +5,7 @@
 
 namespace stepnode::motion {
 
-AxisCore::AxisCore(std::vector<MotorPort*> motors) {
+AxisCore::AxisCore(const std::vector<MotorPort*>& motors) {
   if (motors.empty()) throw std::invalid_argument("an axis needs at least one motor");
   for (MotorPort* m : motors) motors_.push_back({m, m->levels()});
 }

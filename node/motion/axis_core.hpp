@@ -94,7 +94,7 @@ class AxisCore {
  public:
   // `motors`: one, or three for an SPM30 multiplexed axis (one stepped at a time). The
   // e-stop is an input of the motors' ports (the selected motor's is obeyed).
-  explicit AxisCore(std::vector<MotorPort*> motors);
+  explicit AxisCore(const std::vector<MotorPort*>& motors);
 
   // Power-up: no job, no motion, position 0, the first motor selected. Owners are not told
   // (every front end has its own power-up).

@@ -30,7 +30,7 @@ class Channel final : public FrontEnd, public AxisListener {
   void power_up(Tick now);
 
   // ---- set-up commands
-  Conflict profile(const Profile& p, Tick now, Error* error = nullptr);
+  Conflict profile(const Profile& given, Tick now, Error* error = nullptr);
   Error pscale(double units_per_step);
   void delay(uint16_t ms) { delay_ms_ = ms; }
   Error standby(StandbyMode mode, bool sense_high, Tick now);
@@ -146,7 +146,7 @@ class Channel final : public FrontEnd, public AxisListener {
   // edge, whoever moves the axis).
   void input_changed(unsigned motor, const InputEdge& edge) override;
   void start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at);
-  void check_sustain_reached(Tick now);
+  void check_sustain_reached(Tick at);
   void width_advance(Tick now);
   Tick delay_ticks() const;
 

@@ -22,9 +22,7 @@ bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{
       "stepcalc: the Horner STPCALC profile calculator (SPM30 Appendix B), with the pulse\n"
       "engine's exact values for the same move beside STPCALC's."};
@@ -81,4 +79,19 @@ int main(int argc, char** argv) {
   }
   if (!json) std::cout << "plot written to " << plot << "\n";
   return 0;
+}
+
+}  // namespace
+
+// Anything the parser or the engine did not expect (out of memory, a broken pipe on output)
+// ends the program with one line and status 1, never std::terminate.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "stepcalc: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "stepcalc: unexpected error\n";
+  }
+  return 1;
 }

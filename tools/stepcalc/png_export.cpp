@@ -9,7 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
-extern char** environ;
+// environ: declared by <unistd.h> (glibc, _GNU_SOURCE as g++ defines it).
 
 namespace stepnode::tools {
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <cstdio>
 #include <stdexcept>
@@ -29,7 +30,7 @@ struct AxisAccess {
     od::SdoResult r = bus.download(node, index(axis, offset), sub, std::move(data));
     if (!r.ok()) fail(index(axis, offset), r);
   }
-  [[noreturn]] void fail(uint16_t object, const od::SdoResult& r) {
+  [[noreturn]] void fail(uint16_t object, const od::SdoResult& r) const {
     char buf[160];
     std::snprintf(buf, sizeof buf, "node %u axis %u: 0x%04X: 0x%08X %s", node, axis + 1, object,
                   static_cast<uint32_t>(r.abort), std::string(od::abort_text(r.abort)).c_str());
@@ -57,7 +58,7 @@ void progress(AxisAccess& a, bool quiet, std::optional<std::pair<int64_t, int64_
       std::string bar;
       if (from_to && from_to->first != from_to->second) {
         double done = static_cast<double>(pos - from_to->first) / static_cast<double>(from_to->second - from_to->first);
-        int filled = static_cast<int>(std::clamp(done, 0.0, 1.0) * 30 + 0.5);
+        int filled = static_cast<int>(std::lround(std::clamp(done, 0.0, 1.0) * 30));
         bar = "[" + std::string(filled, '#') + std::string(30 - filled, '-') + "] " +
               std::to_string(static_cast<int>(std::clamp(done, 0.0, 1.0) * 100)) + "%";
       }

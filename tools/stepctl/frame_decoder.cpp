@@ -73,7 +73,7 @@ std::string FrameDecoder::describe(const od::CanFrame& f) const {
     if (f.dlc != 1) return fmt("heartbeat node %u (malformed, DLC %u)", node, f.dlc);
     return fmt("heartbeat node %u: ", node) + nmt_state(d[0]);
   }
-  if (pdos_.count(id) || (id >= 0x180 && id < 0x580)) return describe_pdo(f);
+  if (pdos_.contains(id) || (id >= 0x180 && id < 0x580)) return describe_pdo(f);
   return fmt("0x%03X [%u] ", id, f.dlc) + hex_bytes(d, f.dlc);
 }
 

@@ -10,6 +10,13 @@
 #include "tools/stepctl/hp_words.hpp"
 
 namespace stepnode::tools {
+namespace {
+
+// An INTEGER8 (CiA 301 7.1.4.5: two's complement) from its one data byte: DONE? codes are
+// -3..1.
+int integer8(uint8_t byte) { return byte >= 0x80 ? int{byte} - 0x100 : int{byte}; }
+
+}  // namespace
 
 int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string& words, int wait_timeout_s) {
   const auto plan = plan_hp_words(words, channel);  // bad words: nothing is sent
@@ -42,7 +49,7 @@ int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<Hp
       if (a.type == od::DataType::Real64) {
         std::printf("%s %.10g\n", a.label.c_str(), od::decode<double>(r.data));
       } else if (a.type == od::DataType::Integer8) {
-        int code = static_cast<int8_t>(r.data.at(0));
+        int code = integer8(r.data.at(0));
         std::printf("%s %d (%s)\n", a.label.c_str(), code, hp_done_text(code).c_str());
       } else if (a.label == "TEST") {
         unsigned n = r.data.at(0);
@@ -57,7 +64,7 @@ int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<Hp
       for (;;) {
         od::SdoResult r = bus.upload(id, a.index, 0);
         if (!r.ok()) return refused(a, r);
-        int code = static_cast<int8_t>(r.data.at(0));
+        int code = integer8(r.data.at(0));
         if (code == -3) {
           // A command without NOWAIT under a trigger other than AUTO: locked in its wait state.
           std::fprintf(stderr,

@@ -22,7 +22,7 @@ struct HpAccess {
 
 // One command ("MOVE 20 NOWAIT") or several separated by ';'. `channel` is the HP channel
 // (0 = the node's axis 1). Throws std::invalid_argument naming the word and the rule.
-std::vector<HpAccess> plan_hp_words(const std::string& words, unsigned channel);
+std::vector<HpAccess> plan_hp_words(const std::string& text, unsigned channel);
 
 // The manual's text for an error number (3-3) and a conflict row (3-9, 3-26), and for a
 // DONE? code (3-19).

@@ -217,8 +217,8 @@ int cmd_configure(LssMaster& m, const std::vector<std::string>& w) {
 std::optional<uint8_t> lss_bit_timing_index(unsigned kbit) {
   // Index 5 is reserved, 9 is automatic bit rate detection.
   constexpr std::array<unsigned, 9> kTable{1000, 800, 500, 250, 125, 0, 50, 20, 10};
-  for (uint8_t i = 0; i < kTable.size(); ++i)
-    if (kTable[i] == kbit && kbit != 0) return i;
+  for (size_t i = 0; i < kTable.size(); ++i)
+    if (kTable[i] == kbit && kbit != 0) return static_cast<uint8_t>(i);
   return std::nullopt;
 }
 

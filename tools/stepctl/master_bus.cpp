@@ -99,7 +99,7 @@ od::SdoResult MasterBus::upload(uint8_t node, uint16_t index, uint8_t sub, od::S
     if (attempt == kReadAttempts) throw SdoChannelBusy(node);
     // A read changes nothing, so it may go again; a pause that differs per attempt keeps
     // two clients from meeting again in step.
-    std::this_thread::sleep_for(std::chrono::milliseconds(20 * attempt + monotonic_us() % 30));
+    std::this_thread::sleep_for(std::chrono::milliseconds(uint64_t{20} * attempt + monotonic_us() % 30));
   }
 }
 

@@ -58,7 +58,7 @@ std::pair<uint16_t, uint8_t> parse_object_address(const std::string& text) {
     index = text.substr(0, colon);
     sub = text.substr(colon + 1);
   }
-  auto strip = [](std::string s) { return s.rfind("0x", 0) == 0 || s.rfind("0X", 0) == 0 ? s.substr(2) : s; };
+  auto strip = [](const std::string& s) { return s.rfind("0x", 0) == 0 || s.rfind("0X", 0) == 0 ? s.substr(2) : s; };
   return {static_cast<uint16_t>(number(strip(index), 0xFFFF)),
           static_cast<uint8_t>(number(strip(sub), 0xFF))};
 }

@@ -274,7 +274,11 @@ std::string WatchModel::table() const {
         pos = std::to_string(row.drive->position_actual());
         vel = std::to_string(row.drive->velocity_actual());
       }
-      words = (row.status ? words + " | " : std::string()) + "402: " + drive_words(*row.drive);
+      if (row.status)
+        words += " | ";
+      else
+        words.clear();
+      words.append("402: ").append(drive_words(*row.drive));
     }
     out += fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "", row.axis, pos, enc, vel, phase,
                        errors, words);
