@@ -29,13 +29,13 @@ class SCurveDrive : public DriveAxis {
 TEST_F(SCurveDrive, ProfilePositionTakesTheClosedFormTime) {
   // 200 steps at 1000 steps/s, 10 000 steps/s^2, 1e6 steps/s^3: 310 ms exactly
   // (2 x (a/j + v/a) + 90 steps / v). The jerk phase (10 ms) covers j t^3/6 = 1/6 step;
-  // the first step then falls where 1/6 + 50 u + 5000 u^2 = 1: u = 8.844 ms, at 18.844 ms.
+  // the first step then falls where 1/6 + 50 u + 5000 u^2 = 1: u = 8.84437 ms, at 18.84437 ms.
   move_to(200);
   run(ms(400));
   ASSERT_EQ(motor.steps.size(), 200u);
   // (The core may start the motion later for the direction output's setup time: the
   // times are measured from the first step.)
-  EXPECT_NEAR(motor.steps.back().time - motor.steps.front().time, ms(310) - 0.0188439 * kClockHz, 2);
+  EXPECT_NEAR(motor.steps.back().time - motor.steps.front().time, ms(310) - 0.01884437 * kClockHz, 2);
   EXPECT_EQ(drive.position_actual(), 200);
   EXPECT_TRUE(drive.statusword() & kTargetReached);
 }
