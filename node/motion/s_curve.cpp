@@ -19,7 +19,10 @@ Tick ticks(double seconds) { return static_cast<Tick>(std::llround(seconds * kT)
 }  // namespace
 
 void SCurve::push(const Segment& s) {
-  if (count_ < kMaxSegments) segs_[count_++] = s;
+  if (count_ >= kMaxSegments) return;
+  segs_[count_] = s;
+  if (s.len != kOpen) segs_[count_].end = s.at(s.len);
+  ++count_;
 }
 
 SCurve::State SCurve::state_at(Tick at) const {

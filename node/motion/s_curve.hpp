@@ -64,6 +64,7 @@ class SCurve {
     __int128 c0 = 0, c1 = 0, c2 = 0;
     int64_t c3 = 0;
     Kind kind = Kind::Accelerating;
+    __int128 end = 0;  // at(len), the position where it ends (push() sets it)
     __int128 at(Tick tau) const { return c0 + tau * (c1 + tau * (c2 + c3 * static_cast<__int128>(tau))); }
     __int128 slope(Tick tau) const { return c1 + tau * (2 * c2 + 3 * c3 * static_cast<__int128>(tau)); }
   };

@@ -10,14 +10,21 @@ namespace {
 constexpr __int128 kS = static_cast<__int128>(6) * kClockHz * kClockHz * kClockHz;
 constexpr double kV = 6.0 * static_cast<double>(kClockHz) * static_cast<double>(kClockHz);
 
+// An estimate of a large integer in a double without the library's exact conversion
+// (|x| < 2^95 here: positions and velocities of the scale S).
+double approx(__int128 x) {
+  return static_cast<double>(static_cast<int64_t>(x >> 32)) * 4294967296.0 +
+         static_cast<double>(static_cast<uint32_t>(x));
+}
+
 }  // namespace
 
 Tick SCurve::find(const Segment& g, Tick lo, __int128 target) const {
   // The smallest tau in (lo, g.len] with g.at(tau) >= target, given g.at(lo) < target (the
   // position rises in a segment: its velocity is >= 0 throughout).
-  const double r = static_cast<double>(target - g.at(lo));
-  const double v = static_cast<double>(g.slope(lo));
-  const double a = static_cast<double>(g.c2 + 3 * static_cast<__int128>(g.c3) * lo);
+  const double r = approx(target - g.at(lo));
+  const double v = approx(g.slope(lo));
+  const double a = approx(g.c2 + 3 * static_cast<__int128>(g.c3) * lo);
   const double j = static_cast<double>(g.c3);
   double u = v > 0 ? r / v : std::cbrt(r / std::max(j, 1.0));
   for (int i = 0; i < 6; ++i) {
@@ -30,13 +37,13 @@ Tick SCurve::find(const Segment& g, Tick lo, __int128 target) const {
   const Tick hi = g.len;
   Tick t = lo + 1;
   if (u > 1 && u < static_cast<double>(hi - lo)) t = lo + static_cast<Tick>(std::ceil(u));
-  // The estimate is within a tick or two; the exact test moves it, and a bisection takes
-  // over if it was far off.
-  for (int i = 0; i < 3 && t < hi && g.at(t) < target; ++i) ++t;
-  for (int i = 0; i < 3 && t - 1 > lo && g.at(t - 1) >= target; ++i) --t;
-  if (g.at(t) >= target && (t - 1 <= lo || g.at(t - 1) < target)) return t;
+  // The estimate is within a tick; the exact test decides, a bisection takes over if it
+  // was further off.
+  const bool reached = g.at(t) >= target;
+  if (reached && (t - 1 <= lo || g.at(t - 1) < target)) return t;
+  if (!reached && t < hi && g.at(t + 1) >= target) return t + 1;
   Tick below = lo, above = t;
-  if (g.at(t) < target) {
+  if (!reached) {
     below = t;
     above = t + 1;
     while (above < hi && g.at(above) < target) above = std::min(hi, below + 2 * (above - lo));
@@ -55,7 +62,7 @@ std::optional<Tick> SCurve::compute(int& k) const {
     const Segment& g = segs_[k];
     const Tick lo = std::max(last_, g.start) - g.start;
     if (lo >= g.len) continue;
-    if (g.len != kOpen && g.at(g.len) < target) continue;
+    if (g.len != kOpen && g.end < target) continue;
     if (g.len == kOpen && g.c1 <= 0 && g.c2 <= 0) return std::nullopt;
     if (g.at(lo) >= target && last_ < g.start) return g.start + lo;  // a step where it begins
     return g.start + find(g, lo, target);

@@ -187,6 +187,14 @@ std::optional<Tick> StepGenerator::peek() {
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
+  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) {
+    // Most steps fall inside a ramp interval or a run: the step next() takes, without a copy.
+    const int64_t d = ramp_.phase_per_step;
+    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+    const bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
+    if (!(ramping && at > interval_end_) && !decel_first) peeked_ = at;
+  }
   if (peeked_ == kUnpeeked) {
     StepGenerator copy = *this;
     Step s;
