@@ -48,6 +48,11 @@ struct RampSpec {
   // accumulator may leave a step over). 1 keeps a 0 Hz base moving; the HP channel, whose
   // minimum may be 0 Hz, sets the velocity one step from standstill reaches.
   int64_t min_creep_level = 1;
+  // CiA 402 6086h = 3: a jerk-limited profile (node/motion/s_curve.hpp) with the velocity
+  // and slopes above and these jerks in steps/s^3 (60A4h:1..4: begin acceleration, begin
+  // deceleration, end acceleration, end deceleration; 0: not limited).
+  bool s_curve = false;
+  uint32_t jerk[4] = {0, 0, 0, 0};
 };
 
 // Shortens `ramp`'s deceleration, in whole ticks per level as the module's Z, so that the

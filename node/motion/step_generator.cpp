@@ -15,6 +15,11 @@ Tick StepGenerator::interval_length(Rational z, int64_t k) const {
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
                           std::optional<int64_t> distance) {
   peeked_ = kUnpeeked;  // the next step may move
+  if (ramp.s_curve) {
+    direction_ = direction >= 0 ? +1 : -1;
+    return s_start(ramp, start, distance);
+  }
+  scurve_ = false;
   ramp_ = ramp;
   direction_ = direction >= 0 ? +1 : -1;
   distance_ = distance;
@@ -134,6 +139,7 @@ void StepGenerator::end_interval() {
 
 bool StepGenerator::next(Step& out) {
   peeked_ = kUnpeeked;  // the next step may move
+  if (scurve_) return s_next(out);
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
     // Read each turn: reaching a velocity may move the motion to another grid (adopt).
@@ -180,6 +186,15 @@ bool StepGenerator::next(Step& out) {
 std::optional<Tick> StepGenerator::peek() {
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
+  if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
+  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) {
+    // Most steps fall inside a ramp interval or a run: the step next() takes, without a copy.
+    const int64_t d = ramp_.phase_per_step;
+    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+    const bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
+    if (!(ramping && at > interval_end_) && !decel_first) peeked_ = at;
+  }
   if (peeked_ == kUnpeeked) {
     StepGenerator copy = *this;
     Step s;
@@ -211,6 +226,11 @@ void StepGenerator::advance_to(Tick at) {
 void StepGenerator::stop(Tick at) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
+  if (scurve_) {
+    stopping_ = true;
+    s_.p->stop(at);
+    return s_follow();
+  }
   advance_to(at);
   stopping_ = true;
   then_.reset();
@@ -225,6 +245,12 @@ void StepGenerator::stop(Tick at) {
 void StepGenerator::stop(Tick at, Rational decel) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
+  if (scurve_) {
+    stopping_ = true;
+    distance_.reset();
+    s_.p->stop(at, slope_of(decel));
+    return s_follow();
+  }
   advance_to(at);
   ramp_.decel_ticks_per_level = decel;
   if (phase_ == MotionPhase::Decelerating) {
@@ -250,6 +276,10 @@ namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   peeked_ = kUnpeeked;  // the next step may move
+  if (scurve_ && phase_ != MotionPhase::Idle && !stopping_) {
+    s_.p->change_velocity(at, static_cast<double>(level) * kClockHz / static_cast<double>(ramp_.phase_per_step));
+    return s_follow();
+  }
   if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
   advance_to(at);
   // Never below one level: at level 0 the motion would stand still for ever and the next
@@ -292,6 +322,7 @@ void StepGenerator::reached_velocity() {
 void StepGenerator::set_level(Tick at, int64_t level) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
+  leave_s_curve(at);
   advance_to(at);
   level_ = std::max<int64_t>(level, 1);
   ramp_.base_level = ramp_.run_level = level_;  // a constant velocity: nothing to ramp
@@ -305,6 +336,7 @@ void StepGenerator::set_level(Tick at, int64_t level) {
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
+  leave_s_curve(at);
   advance_to(at);
   then_.reset();
   const int64_t level =
@@ -328,6 +360,12 @@ void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
+  if (scurve_) {
+    distance_ = steps_done_ + std::max<int64_t>(steps, 0);
+    if (steps <= 0) return halt(at);
+    s_.p->retarget(at, *distance_);
+    return s_follow();
+  }
   advance_to(at);
   distance_ = steps_done_ + std::max<int64_t>(steps, 0);
   ramp_.decel_ticks_per_level = ramp.decel_ticks_per_level;

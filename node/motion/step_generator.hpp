@@ -4,9 +4,11 @@
 // constant-velocity interval, so the cost is O(1) per step at any rate.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <optional>
 
 #include "node/motion/ramp.hpp"
+#include "node/motion/s_curve.hpp"
 #include "node/motion/timebase.hpp"
 
 namespace stepnode::motion {
@@ -60,6 +62,10 @@ class StepGenerator {
   // phase carry on; if the new end is too close to ramp down, the ramp starts at once.
   void retarget(Tick at, int64_t steps, const RampSpec& ramp);
 
+  // Steps from here to standstill with the deceleration ramp (a change of target closer
+  // than this overshoots).
+  double steps_to_stop() const;
+
   MotionPhase phase() const { return phase_; }
   bool moving() const { return phase_ != MotionPhase::Idle; }
   bool stopping() const { return moving() && stopping_; }  // stop(): ramping down to end
@@ -89,6 +95,13 @@ class StepGenerator {
   bool decel_needed() const;
   void plan_decel();
   void count_step();
+  // The jerk-limited profile (ramp.s_curve): step_generator_s_curve.cpp.
+  void s_start(const RampSpec& ramp, Tick start, std::optional<int64_t> distance);
+  bool s_next(Step& out);
+  void s_follow();
+  void leave_s_curve(Tick at);
+  JerkLimits jerk_limits(const RampSpec& ramp) const;
+  double slope_of(Rational ticks_per_level) const;
 
   RampSpec ramp_;
   MotionPhase phase_ = MotionPhase::Idle;
@@ -111,6 +124,21 @@ class StepGenerator {
   std::optional<RampSpec> then_;  // change_velocity(): the grid to move to once there
   int64_t steps_done_ = 0;
   Marks marks_;
+  // The S-curve's state, on the heap (the hot path copies the generator; a trapezoid
+  // copies only the empty pointer), deep-copied with the generator.
+  struct SCurveSlot {
+    std::unique_ptr<SCurve> p;
+    SCurveSlot() = default;
+    SCurveSlot(const SCurveSlot& o) : p(o.p ? std::make_unique<SCurve>(*o.p) : nullptr) {}
+    SCurveSlot& operator=(const SCurveSlot& o) {
+      if (this != &o) p = o.p ? std::make_unique<SCurve>(*o.p) : nullptr;
+      return *this;
+    }
+    SCurveSlot(SCurveSlot&&) = default;
+    SCurveSlot& operator=(SCurveSlot&&) = default;
+  };
+  SCurveSlot s_;
+  bool scurve_ = false;  // the running motion is s_'s
 };
 
 }  // namespace stepnode::motion

@@ -52,6 +52,8 @@ constexpr uint16_t kHomingError = 1u << 13;          // HM
 constexpr uint16_t kDriveFollows = 1u << 12;         // CSP, CSV: the command value is followed
 constexpr uint16_t kIpModeActive = 1u << 12;         // IP
 }  // namespace sw_mode
+// 6086h motion profile types this drive runs: 0 linear ramp (trapezoid), 3 jerk-limited ramp.
+constexpr int16_t kLinearRamp = 0, kJerkLimitedRamp = 3;
 // Controlword bit 4 in interpolated position mode: enable interpolation (CiA 402-2).
 constexpr uint16_t kEnableIp = 1u << 4;
 // Controlword bit 4 in homing mode: the rising edge starts the homing (CiA 402-2).
@@ -64,6 +66,10 @@ struct Parameters {
   uint32_t acceleration = 10'000;           // 6083h
   uint32_t deceleration = 10'000;           // 6084h
   uint32_t quick_stop_deceleration = 50'000;  // 6085h
+  int16_t motion_profile_type = 0;          // 6086h: 0 trapezoid, 3 jerk-limited (PP, PV)
+  // 60A4h:1..4 in steps/s^3: begin acceleration, begin deceleration, end acceleration, end
+  // deceleration jerk (0: not limited).
+  uint32_t jerk[4] = {10'000, 10'000, 10'000, 10'000};
   uint32_t position_window = 0;             // 6067h: |target - actual| <= window
   uint16_t position_window_time_ms = 0;     // 6068h
   int32_t min_position_limit = INT32_MIN;   // 607Dh:1

@@ -2,6 +2,7 @@
 // the buffered next set-point, change set immediately, relative targets and the software
 // limits. The trajectory of each set-point is one motion of the core.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 #include "node/profiles/cia402/drive.hpp"
@@ -57,7 +58,7 @@ void Drive::new_set_point(uint16_t cw, Tick now) {
   next_.reset();
   const motion::StepGenerator& g = core_.generator();
   const int64_t ahead = (sp.target - core_.position()) * g.direction();
-  const int64_t to_stop = static_cast<int64_t>(g.ramp().decel_phase(g.level()) / g.ramp().phase_per_step) + 2;
+  const int64_t to_stop = static_cast<int64_t>(std::ceil(g.steps_to_stop())) + 2;
   if (!g.stopping() && g.remaining() && ahead >= to_stop) {
     core_.retarget(now, ahead, g.ramp());
   } else {
@@ -70,7 +71,13 @@ motion::RampSpec Drive::ramp(uint32_t velocity) const {
   const int64_t v = std::clamp<int64_t>(velocity, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
   const int64_t acc = std::max<uint32_t>(parameters_.acceleration, 1);
   const int64_t dec = std::max<uint32_t>(parameters_.deceleration, 1);
-  return motion::profile_ramp(v, acc, dec, grid_);
+  motion::RampSpec r = motion::profile_ramp(v, acc, dec, grid_);
+  // 6086h = 3: the same limits with the jerks of 60A4h (PP, PV; homing keeps its trapezoids).
+  if (parameters_.motion_profile_type == kJerkLimitedRamp) {
+    r.s_curve = true;
+    std::copy(std::begin(parameters_.jerk), std::end(parameters_.jerk), std::begin(r.jerk));
+  }
+  return r;
 }
 
 void Drive::start_positioning(const SetPoint& sp, Tick now) {

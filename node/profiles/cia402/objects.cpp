@@ -141,10 +141,16 @@ void add_profile_objects(AxisTable t) {
   t.var(kProfileAcceleration, "Profile acceleration", DT::Unsigned32, RW, u32(1'000));
   t.var(kProfileDeceleration, "Profile deceleration", DT::Unsigned32, RW, u32(1'000));
   t.var(kQuickStopDeceleration, "Quick stop deceleration", DT::Unsigned32, RW, u32(10'000));
-  // 6086h: 0 linear ramp (trapezoidal profile), the one the drive runs. 3, DSP 402 V2.0's
-  // jerk-limited ramp, joins it when the engine has an S-curve (1 sin^2 ramp and 2
-  // jerk-free ramp are not offered).
-  one_of<int16_t>(t.var(kMotionProfileType, "Motion profile type", DT::Integer16, RW, i16(0)), {0});
+  // 6086h: 0 linear ramp (trapezoidal profile) and 3, DSP 402 V2.0's jerk-limited ramp
+  // (S-curve, PP and PV); 1 sin^2 ramp and 2 jerk-free ramp are not offered (0x06090030).
+  one_of<int16_t>(t.var(kMotionProfileType, "Motion profile type", DT::Integer16, RW, i16(0)), {0, 3});
+  // 60A4h: the jerks of the S-curve in steps/s^3, every UNSIGNED32 honoured (0: the jerk is
+  // not limited, that phase takes no time); vendor default 10 000.
+  Object& jerk = t.array(kProfileJerk, "Profile jerk");
+  jerk.add(jerk_sub::kBeginAcceleration, "Begin acceleration jerk", DT::Unsigned32, RW, u32(10'000));
+  jerk.add(jerk_sub::kBeginDeceleration, "Begin deceleration jerk", DT::Unsigned32, RW, u32(10'000));
+  jerk.add(jerk_sub::kEndAcceleration, "End acceleration jerk", DT::Unsigned32, RW, u32(10'000));
+  jerk.add(jerk_sub::kEndDeceleration, "End deceleration jerk", DT::Unsigned32, RW, u32(10'000));
   // 6098h: 0 (no homing method assigned) by default; the methods the standard defines: 1..35
   // and 37, without the reserved 15, 16, 31, 32 and 36 (the homing mode will refuse at its
   // start a method the axis cannot run).

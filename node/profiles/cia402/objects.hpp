@@ -45,6 +45,7 @@ constexpr uint16_t kProfileAcceleration = 0x6083;        // U32 rw
 constexpr uint16_t kProfileDeceleration = 0x6084;        // U32 rw
 constexpr uint16_t kQuickStopDeceleration = 0x6085;      // U32 rw
 constexpr uint16_t kMotionProfileType = 0x6086;          // I16 rw
+constexpr uint16_t kProfileJerk = 0x60A4;                // ARRAY U32
 constexpr uint16_t kPositionEncoderResolution = 0x608F;  // ARRAY U32
 constexpr uint16_t kGearRatio = 0x6091;                  // ARRAY U32
 constexpr uint16_t kFeedConstant = 0x6092;               // ARRAY U32
@@ -82,6 +83,10 @@ constexpr uint8_t kFeed = 1, kShaftRevolutions = 2;  // 6092h
 }
 namespace homing_speed_sub {
 constexpr uint8_t kSwitchSearch = 1, kZeroSearch = 2;  // 6099h
+}
+namespace jerk_sub {
+// 60A4h as drives number it (Nanotec PD4 manual): the jerk at each end of the ramps.
+constexpr uint8_t kBeginAcceleration = 1, kBeginDeceleration = 2, kEndAcceleration = 3, kEndDeceleration = 4;
 }
 namespace ip_data_sub {
 constexpr uint8_t kSetPoint = 1;  // 60C1h: the position set-point of linear interpolation

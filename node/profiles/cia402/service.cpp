@@ -50,11 +50,13 @@ void Cia402Service::install_hooks(unsigned a) {
   });
   for (uint16_t base : {kMaxProfileVelocity, kProfileVelocity, kProfileAcceleration, kProfileDeceleration,
                         kQuickStopDeceleration, kPositionWindow, kPositionWindowTime, kHomingMethod,
-                        kHomingAcceleration, kHomeOffset, kFollowingErrorWindow, kFollowingErrorTimeout})
+                        kHomingAcceleration, kHomeOffset, kFollowingErrorWindow, kFollowingErrorTimeout,
+                        kMotionProfileType})
     od::listen(entry(base), [this, a] { load_parameters(a); });
   for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant, kHomingSpeeds,
                         kInterpolationPeriod})
     for (uint8_t sub : {uint8_t{1}, uint8_t{2}}) od::listen(entry(base, sub), [this, a] { load_parameters(a); });
+  for (uint8_t sub = 1; sub <= 4; ++sub) od::listen(entry(kProfileJerk, sub), [this, a] { load_parameters(a); });
   for (uint16_t base : {kQuickStopOption, kShutdownOption, kDisableOperationOption, kHaltOption, kFaultReactionOption})
     od::listen(entry(base), [this, a] { load_options(a); });
 }
@@ -74,6 +76,8 @@ void Cia402Service::load_parameters(unsigned a) {
   p.acceleration = to_u32(un.to_steps(u32(kProfileAcceleration)));
   p.deceleration = to_u32(un.to_steps(u32(kProfileDeceleration)));
   p.quick_stop_deceleration = to_u32(un.to_steps(u32(kQuickStopDeceleration)));
+  p.motion_profile_type = dictionary_.get<int16_t>(index(a, kMotionProfileType), 0);
+  for (uint8_t sub = 1; sub <= 4; ++sub) p.jerk[sub - 1] = to_u32(un.to_steps(u32(kProfileJerk, sub)));
   p.position_window = to_u32(un.to_steps(u32(kPositionWindow)));
   p.position_window_time_ms = dictionary_.get<uint16_t>(index(a, kPositionWindowTime), 0);
   const int32_t low = dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMin);

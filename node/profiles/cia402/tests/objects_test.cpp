@@ -77,6 +77,10 @@ const std::vector<Row> kTable = {
     {0x6099, 1, DT::Unsigned32, RW, false, true, 1000},
     {0x6099, 2, DT::Unsigned32, RW, false, true, 100},
     {0x609A, 0, DT::Unsigned32, RW, false, true, 1000},
+    {0x60A4, 1, DT::Unsigned32, RW, false, true, 10000},  // begin acceleration jerk
+    {0x60A4, 2, DT::Unsigned32, RW, false, true, 10000},  // begin deceleration jerk
+    {0x60A4, 3, DT::Unsigned32, RW, false, true, 10000},  // end acceleration jerk
+    {0x60A4, 4, DT::Unsigned32, RW, false, true, 10000},  // end deceleration jerk
     {0x60B0, 0, DT::Integer32, RW, true, false, 0},
     {0x60B1, 0, DT::Integer32, RW, true, false, 0},
     {0x60C0, 0, DT::Integer16, RW, false, true, 0},  // linear interpolation
@@ -144,7 +148,7 @@ TEST_F(Cia402Objects, EachObjectAsTheStandardDescribesIt) {
   for (const auto& [index, object] : od.objects())
     if (index >= 0x6000 && index <= 0x67FF) present.insert(index);
   EXPECT_EQ(present, table);
-  EXPECT_EQ(table.size(), 44u);
+  EXPECT_EQ(table.size(), 45u);
 }
 
 TEST_F(Cia402Objects, SampledValuesAreThePositionsAndVelocities) {
@@ -182,8 +186,10 @@ TEST_F(Cia402Objects, OptionCodesTakeTheStandardsValuesOnly) {
     EXPECT_EQ(write<int16_t>(r.index, 0, static_cast<int16_t>(r.low - 1)), SdoAbort::ValueTooLow);
   }
   EXPECT_EQ(write<int16_t>(0x6086, 0, 0), SdoAbort::None);          // linear ramp
-  EXPECT_EQ(write<int16_t>(0x6086, 0, 3), SdoAbort::InvalidValue);  // jerk-limited: not yet
-  EXPECT_EQ(write<int16_t>(0x6086, 0, 1), SdoAbort::InvalidValue);
+  EXPECT_EQ(write<int16_t>(0x6086, 0, 3), SdoAbort::None);          // jerk-limited ramp
+  EXPECT_EQ(write<int16_t>(0x6086, 0, 1), SdoAbort::InvalidValue);  // sin^2 ramp: not offered
+  EXPECT_EQ(write<int16_t>(0x6086, 0, 2), SdoAbort::InvalidValue);  // jerk-free ramp: not offered
+  EXPECT_EQ(write<int16_t>(0x6086, 0, -1), SdoAbort::InvalidValue);
   EXPECT_EQ(write<int16_t>(0x60C0, 0, 1), SdoAbort::InvalidValue);
   for (int8_t method : {0, 1, 14, 17, 30, 33, 35, 37})
     EXPECT_EQ(write<int8_t>(0x6098, 0, method), SdoAbort::None) << int{method};

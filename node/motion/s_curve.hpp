@@ -1,0 +1,100 @@
+// The jerk-limited (S-curve) profile, CiA 402 6086h = 3: the exact tick of every step of a
+// motion whose acceleration changes at a limited rate (jerk, 60A4h).
+//
+// The motion is a chain of segments of constant jerk (+j, 0, -j) whose ends fall on ticks.
+// In a segment the position is an exact cubic in the tick count τ, kept in integers scaled
+// by S = 6 T^3 (T = kClockHz): S p(τ) = c0 + c1 τ + c2 τ^2 + c3 τ^3 with c1 = 6 T^2 v,
+// c2 = 3 T a, c3 = j (steps, steps/s, steps/s^2, steps/s^3). Step n falls on the first tick
+// at which S p reaches n S: a double-precision Newton estimate, checked and corrected
+// with the exact integers. Position and velocity are continuous; at a segment end the
+// acceleration may jump by less than one tick of jerk (the phases are whole ticks long).
+// A move to a target is planned backwards from the target (its ramp down ends there with
+// v = 0 exactly), forwards from where the motion is; a cruise joins the two.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "node/motion/timebase.hpp"
+
+namespace stepnode::motion {
+
+// The limits of an S-curve, in steps, steps/s, steps/s^2 and steps/s^3. A jerk of 0 is not
+// limited (60A4h: "0: the jerk is not limited"): that phase takes no time.
+struct JerkLimits {
+  double velocity = 1;      // the cruise velocity (6081h, 60FFh)
+  double acceleration = 1;  // 6083h
+  double deceleration = 1;  // 6084h (or 6085h for a quick stop)
+  uint32_t begin_accel_jerk = 0, end_accel_jerk = 0;  // 60A4h:1, :3
+  uint32_t begin_decel_jerk = 0, end_decel_jerk = 0;  // 60A4h:2, :4
+};
+
+class SCurve {
+ public:
+  enum class Kind : uint8_t { Accelerating, Cruise, Decelerating, Hold, Creep };
+
+  // From standstill at `start`: to `distance` steps (> 0), or to the velocity and on.
+  void start(const JerkLimits& limits, Tick start, std::optional<int64_t> distance);
+  // The next step's tick after the last one; nullopt when the motion has ended (end()).
+  std::optional<Tick> next_step();
+  std::optional<Tick> peek();
+  // From `at`: ramp to velocity 0 and end (deceleration `decel`, or the limits' one).
+  void stop(Tick at, std::optional<double> decel = std::nullopt);
+  // From `at`: a new cruise velocity (a move keeps its target), or a new target
+  // `distance` steps from the start (the velocity and acceleration carry on).
+  void change_velocity(Tick at, double velocity);
+  void retarget(Tick at, int64_t distance);
+
+  bool ended() const { return ended_; }
+  Tick end() const { return end_; }
+  int64_t steps() const { return steps_; }
+  std::optional<int64_t> distance() const { return distance_; }
+  // At the last step (or change): the velocity in steps/s and what the motion does.
+  double velocity() const { return velocity_; }
+  Kind kind() const;
+  bool at_target_velocity() const;  // a velocity motion holds its velocity
+  double target_velocity() const { return hold_velocity_; }
+  // Steps from here to standstill with the deceleration ramp (the motion stops there).
+  double steps_to_stop(Tick at) const;
+
+ private:
+  struct Segment {
+    Tick start = 0;
+    Tick len = 0;  // kOpen: runs until changed
+    __int128 c0 = 0, c1 = 0, c2 = 0;
+    int64_t c3 = 0;
+    Kind kind = Kind::Accelerating;
+    __int128 end = 0;  // at(len), the position where it ends (push() sets it)
+    __int128 at(Tick tau) const { return c0 + tau * (c1 + tau * (c2 + c3 * static_cast<__int128>(tau))); }
+    __int128 slope(Tick tau) const { return c1 + tau * (2 * c2 + 3 * c3 * static_cast<__int128>(tau)); }
+  };
+  struct State {
+    __int128 p = 0, v = 0, a = 0;  // S p, S dp/dτ, S d2p/dτ2 / 2 (c0, c1, c2 of a segment here)
+  };
+  static constexpr Tick kOpen = INT64_MAX / 4;
+  static constexpr int kMaxSegments = 12;
+
+  State state_at(Tick at) const;
+  void replan(Tick at, std::optional<int64_t> distance, double velocity, std::optional<double> decel);
+  void push(const Segment& s);
+  void add_transition(Tick& t, State& s, double v1, double decel);
+  void add_position_goal(Tick t, State s, int64_t distance, double vp);
+  void add_open(Tick t, const State& s, Kind kind);
+  Tick find(const Segment& seg, Tick lo, __int128 target) const;
+  std::optional<Tick> compute(int& seg) const;
+
+  JerkLimits limits_;
+  std::array<Segment, kMaxSegments> segs_{};
+  int count_ = 0, seg_ = 0;
+  Tick last_ = 0;        // the last step's tick (or the start)
+  int64_t steps_ = 0;
+  std::optional<int64_t> distance_;
+  double velocity_ = 0;
+  double hold_velocity_ = -1;  // the velocity a velocity motion goes to
+  bool ended_ = true;
+  Tick end_ = 0;
+  std::optional<Tick> peeked_;
+  int peeked_seg_ = 0;
+};
+
+}  // namespace stepnode::motion

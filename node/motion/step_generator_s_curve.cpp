@@ -1,0 +1,110 @@
+// The step generator running a jerk-limited profile (RampSpec::s_curve, CiA 402 6086h = 3):
+// the motion is node/motion/s_curve's; the generator keeps the state its users read
+// (phase, level, steps, marks) in step with it.
+#include <algorithm>
+#include <cmath>
+
+#include "node/motion/step_generator.hpp"
+
+namespace stepnode::motion {
+
+double StepGenerator::slope_of(Rational z) const {
+  // Ticks per level on this grid -> steps/s^2: kClockHz^2 / (z * phase_per_step).
+  const double hz = static_cast<double>(kClockHz);
+  return hz * hz * static_cast<double>(z.den) / (static_cast<double>(z.num) * static_cast<double>(ramp_.phase_per_step));
+}
+
+JerkLimits StepGenerator::jerk_limits(const RampSpec& r) const {
+  JerkLimits l;
+  l.velocity = r.velocity_of(r.run_level);
+  l.acceleration = slope_of(r.accel_ticks_per_level);
+  l.deceleration = slope_of(r.decel_ticks_per_level);
+  l.begin_accel_jerk = r.jerk[0];
+  l.begin_decel_jerk = r.jerk[1];
+  l.end_accel_jerk = r.jerk[2];
+  l.end_decel_jerk = r.jerk[3];
+  return l;
+}
+
+void StepGenerator::s_start(const RampSpec& ramp, Tick start, std::optional<int64_t> distance) {
+  ramp_ = ramp;
+  scurve_ = true;
+  distance_ = distance;
+  steps_done_ = 0;
+  acc_ = 0;
+  t_ = start;
+  stopping_ = holding_ = false;
+  then_.reset();
+  marks_ = Marks{};
+  marks_.start = start;
+  level_ = 0;
+  if (!s_.p) s_.p = std::make_unique<SCurve>();
+  if (distance && *distance <= 0) {
+    phase_ = MotionPhase::Idle;
+    marks_.end = start;
+    return;
+  }
+  s_.p->start(jerk_limits(ramp), start, distance);
+  phase_ = MotionPhase::Accelerating;
+}
+
+void StepGenerator::s_follow() {
+  // The phase and level the motion shows after its last step or change.
+  const SCurve& s = *s_.p;
+  using K = SCurve::Kind;
+  switch (s.kind()) {
+    case K::Accelerating: phase_ = MotionPhase::Accelerating; break;
+    case K::Decelerating: phase_ = MotionPhase::Decelerating; break;
+    case K::Creep: phase_ = MotionPhase::Creeping; break;
+    default: phase_ = MotionPhase::Running; break;
+  }
+  const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
+  // Holding a velocity: exactly its level (the phases on whole ticks leave it within a few
+  // millionths); otherwise the velocity at the last step.
+  const double v = s.at_target_velocity() ? s.target_velocity() : s.velocity();
+  level_ = std::max<int64_t>(0, std::llround(v * lph));
+  marks_.peak_level = std::max(marks_.peak_level, level_);
+}
+
+bool StepGenerator::s_next(Step& out) {
+  if (phase_ == MotionPhase::Idle) return false;
+  const std::optional<Tick> t = s_.p->next_step();
+  if (!t) {
+    phase_ = MotionPhase::Idle;
+    t_ = std::max(t_, s_.p->end());
+    marks_.end = t_;
+    level_ = 0;
+    return false;
+  }
+  t_ = *t;
+  ++steps_done_;
+  out = Step{t_, direction_};
+  s_follow();
+  if (s_.p->ended()) {
+    phase_ = MotionPhase::Idle;
+    marks_.end = t_;
+  }
+  return true;
+}
+
+void StepGenerator::leave_s_curve(Tick at) {
+  // A cyclic mode takes over a jerk-limited motion: the trapezoid's state at its velocity,
+  // the phase accumulator empty (at most a fraction of a step late).
+  if (!scurve_) return;
+  scurve_ = false;
+  t_ = std::max(t_, at);
+  acc_ = 0;
+  level_ = std::max<int64_t>(level_, 1);
+  phase_ = MotionPhase::Running;
+  holding_ = stopping_ = false;
+  decel_tick_ = -1;
+  distance_.reset();
+}
+
+double StepGenerator::steps_to_stop() const {
+  if (phase_ == MotionPhase::Idle) return 0;
+  if (scurve_) return s_.p->steps_to_stop(t_);
+  return static_cast<double>(ramp_.decel_phase(level_) / ramp_.phase_per_step);
+}
+
+}  // namespace stepnode::motion
