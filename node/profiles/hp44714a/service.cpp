@@ -280,6 +280,16 @@ void HpService::publish(unsigned a) {
   }
 }
 
+uint64_t HpService::next_advance_us(uint64_t now_us) {
+  for (const auto& ch : channels_) {
+    const motion::hp::Done d = ch->done();
+    const bool auto_off_due = ch->standby_mode() == motion::hp::StandbyMode::Auto && ch->motor_powered();
+    if (d == motion::hp::Done::Running || d == motion::hp::Done::SustainRunning || auto_off_due)
+      return poll_deadline(now_us);
+  }
+  return kNoDeadline;
+}
+
 void HpService::advance(uint64_t) {
   for (auto& ch : channels_) ch->advance_to(now());
 }
