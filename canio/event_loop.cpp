@@ -53,6 +53,27 @@ void EventLoop::every(uint64_t period_us, Callback on_tick) {
   });
 }
 
+int EventLoop::add_timer(Callback on_due) {
+  int fd = ::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(std::string("timerfd_create: ") + std::strerror(errno));
+  owned_fds_.push_back(fd);
+  watch(fd, [fd, cb = std::move(on_due)] {
+    uint64_t expirations = 0;
+    if (::read(fd, &expirations, sizeof expirations) > 0) cb();
+  });
+  return fd;
+}
+
+void EventLoop::arm_at(int timer, uint64_t at_us) {
+  itimerspec spec{};  // no interval: one expiry
+  // An it_value of zero would disarm the timer: a time long past is 1 ns, due at once.
+  spec.it_value.tv_sec = static_cast<time_t>(at_us / 1'000'000);
+  spec.it_value.tv_nsec = static_cast<long>((at_us % 1'000'000) * 1000);
+  if (spec.it_value.tv_sec == 0 && spec.it_value.tv_nsec == 0) spec.it_value.tv_nsec = 1;
+  if (::timerfd_settime(timer, TFD_TIMER_ABSTIME, &spec, nullptr) < 0)
+    throw std::runtime_error(std::string("timerfd_settime: ") + std::strerror(errno));
+}
+
 void EventLoop::stop_on_signals() {
   sigset_t set;
   sigemptyset(&set);
@@ -73,6 +94,7 @@ void EventLoop::run() {
   epoll_event events[16];
   while (running_) {
     int n = ::epoll_wait(epoll_fd_, events, 16, -1);
+    ++wakeups_;
     if (n < 0) {
       if (errno == EINTR) continue;
       throw std::runtime_error(std::string("epoll_wait: ") + std::strerror(errno));

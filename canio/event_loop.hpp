@@ -19,6 +19,13 @@ class EventLoop {
   void watch(int fd, Callback on_readable);
   // Calls `on_tick` every `period_us` (a timerfd; missed expirations are coalesced).
   void every(uint64_t period_us, Callback on_tick);
+  // A one-shot timer on absolute CLOCK_MONOTONIC time (a timerfd with TFD_TIMER_ABSTIME):
+  // `on_due` runs once the time given to arm_at() has come (at once if it has passed).
+  // The caller re-arms it, usually for the earliest deadline of what it runs.
+  int add_timer(Callback on_due);
+  void arm_at(int timer, uint64_t at_us);
+  // How often epoll_wait returned (the process woke), for figures.
+  uint64_t wakeups() const { return wakeups_; }
   // Ends run() on SIGINT or SIGTERM (they are blocked for the whole process).
   void stop_on_signals();
   void run();
@@ -31,6 +38,7 @@ class EventLoop {
   std::map<int, Callback> callbacks_;
   std::vector<int> owned_fds_;
   bool running_ = false;
+  uint64_t wakeups_ = 0;
 };
 
 }  // namespace stepnode::canio

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "node/deadline.hpp"
 #include "node/nmt.hpp"
 #include "node/receive_filters.hpp"
 
@@ -20,6 +21,10 @@ class Application {
   // Brings the application up to `now_us`; called before every frame and tick, so a
   // command in a frame acts on an application that is current to the microsecond.
   virtual void advance(uint64_t /*now_us*/) {}
+  // When the application next needs an advance (absolute us, node/deadline.hpp): the
+  // earliest of its axes and profiles. The default is the conservative poll, so an
+  // application that does not say is advanced every poll period as before issue 13.
+  virtual uint64_t next_advance_us(uint64_t now_us) { return poll_deadline(now_us); }
   // Power-up and NMT reset node, after the stored parameters were loaded.
   virtual void reset_application(uint64_t /*now_us*/) {}
   // Every SYNC received (or produced here), after the synchronous PDOs.

@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "node/deadline.hpp"
 #include "node/device_objects.hpp"
 #include "node/motion/axis.hpp"
 #include "node/sim/machine.hpp"
@@ -26,6 +27,12 @@ class AxisBank {
   // The master was lost (or can no longer reach the node): every moving axis ramps down,
   // %I8 latches.
   void master_lost(uint64_t now_us);
+  // When an axis next needs an advance (absolute us; kNoDeadline: every axis idle). A
+  // moving axis: its next step, but at most once per step wake period (the poll period,
+  // or half the step port's horizon if longer: the planner has queued the steps up to
+  // the horizon at the last advance, so the port never runs dry). A job without a next
+  // step (a wait, its end, a limit released): the conservative poll.
+  uint64_t next_deadline_us(uint64_t now_us);
 
   unsigned count() const { return static_cast<unsigned>(axes_.size()); }
   motion::AxisCore& core(unsigned n) { return *cores_.at(n); }
@@ -53,6 +60,7 @@ class AxisBank {
   uint64_t epoch_us_ = 0;
   bool epoch_set_ = false;
   uint64_t now_us_ = 0;
+  uint64_t step_wake_us_ = kPollUs;  // the shortest sleep while an axis moves
 };
 
 }  // namespace stepnode::node

@@ -388,6 +388,23 @@ void CanopenNode::on_tick(uint64_t now_us) {
   emcy_.on_tick(now_us);
 }
 
+uint64_t CanopenNode::next_deadline_us(uint64_t now_us) {
+  // The services on_tick runs in this state, and no others: one it skips would otherwise
+  // report a deadline that never moves and wake the loop for nothing.
+  if (filters_dirty_) return now_us;
+  uint64_t next = app_ && booted_ ? app_->next_advance_us(now_us) : kNoDeadline;
+  next = earliest(next, consumer_.next_deadline_us());
+  if (state_ == NmtState::Initialising) return next;
+  next = earliest(next, guarding_.next_deadline_us());
+  next = earliest(next, heartbeat_.next_deadline_us());
+  if (state_ == NmtState::Stopped) return next;
+  next = earliest(next, sdo_.next_deadline_us(now_us));
+  next = earliest(next, sync_.next_deadline_us(now_us));
+  next = earliest(next, time_.next_deadline_us(now_us));
+  next = earliest(next, pdo_.next_deadline_us(now_us));
+  return earliest(next, emcy_.next_deadline_us(now_us));
+}
+
 const std::vector<ReceiveFilter>& CanopenNode::receive_filters() {
   if (filters_dirty_) update_receive_filters();
   return filters_;

@@ -60,6 +60,10 @@ class CanopenNode {
   // synchronous window 0x1007 is measured from a SYNC's arrival.
   void on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   void on_tick(uint64_t now_us);
+  // When on_tick next has work (absolute us, node/deadline.hpp): the earliest deadline of
+  // every service that runs in the present NMT state, and of the application. Valid until
+  // the next frame or tick, after which the loop asks again.
+  uint64_t next_deadline_us(uint64_t now_us);
   void on_bus_event(BusEvent event, uint64_t now_us);
   // The socket's count of received frames it dropped (its queue was full), as reported
   // with the latest frame: an increase is EMCY 0x8110 and adds to object 0x2F10.

@@ -80,7 +80,7 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   if (auto iface = file.string("iface"); iface && !given.iface) cfg.iface = *iface;
   const bool id_set = load_node_id(file, cfg, given.node_id);
   if (auto dir = file.string("state_dir"); dir && !given.state_dir) cfg.options.state_dir = *dir;
-  if (auto us = file.integer("tick_us", 100, 100000)) cfg.tick_us = static_cast<uint64_t>(*us);
+  if (auto us = file.integer("tick_us", 100, 10'000'000)) cfg.tick_us = static_cast<uint64_t>(*us);
   if (auto us = file.integer("step_horizon_us", 0, 1'000'000))
     cfg.options.layout.step_horizon_us = static_cast<uint32_t>(*us);
   if (auto n = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes))) cfg.options.layout.axes = static_cast<unsigned>(*n);
@@ -117,7 +117,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
                  "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
   app.add_option("--config", config_file, "TOML config file (see README)");
   app.add_option("--state-dir", state_dir, "where stored parameters (0x1010) are kept");
-  app.add_option("--tick-us", cfg.tick_us, "engine tick period in microseconds (100..100000)");
+  app.add_option("--tick-us", cfg.tick_us, "the longest the node sleeps between its deadlines, in microseconds (100..10000000, default 1000000)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
   app.add_flag("--print-eds", cfg.print_eds, "print the device's EDS (CiA 306) and exit");
   try {
@@ -170,8 +170,8 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   }
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
-  if (cfg.tick_us < 100 || cfg.tick_us > 100000)
-    throw UsageError("--tick-us " + std::to_string(cfg.tick_us) + ": must be 100..100000");
+  if (cfg.tick_us < 100 || cfg.tick_us > 10'000'000)
+    throw UsageError("--tick-us " + std::to_string(cfg.tick_us) + ": must be 100..10000000");
   static const char* levels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (std::find(std::begin(levels), std::end(levels), cfg.log_level) == std::end(levels))
     throw UsageError("--log-level " + cfg.log_level + ": must be one of trace, debug, info, warn, error, critical, off");

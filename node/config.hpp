@@ -15,7 +15,7 @@ namespace stepnode::node {
 struct NodeConfig {
   std::string iface;
   NodeOptions options;
-  uint64_t tick_us = 1000;
+  uint64_t tick_us = 1'000'000;  // the longest the node sleeps (issue 13: it wakes for its deadlines)
   std::string log_level = "info";
   // Object defaults from the config's [defaults] table: "1017" or "1016:1" -> value text.
   std::vector<std::pair<std::string, std::string>> object_defaults;

@@ -56,6 +56,12 @@ void Device::advance(uint64_t now_us) {
   publish();
 }
 
+uint64_t Device::next_advance_us(uint64_t now_us) {
+  uint64_t next = axes_.next_deadline_us(now_us);
+  for (auto& p : profiles_) next = earliest(next, p->next_advance_us(now_us));
+  return next;
+}
+
 void Device::publish() {
   for (auto& p : profiles_) p->publish();
 }

@@ -39,6 +39,9 @@ class Device final : private Application {
   // timestamp, <= now_us; 0 when unknown), so TRIG SYS starts at the SYNC's arrival.
   void on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   void on_tick(uint64_t now_us) { canopen_.on_tick(now_us); }
+  // When on_tick next has work (absolute us; node/deadline.hpp): every service, axis and
+  // profile. node/main.cpp sleeps until then (bounded by --tick-us).
+  uint64_t next_deadline_us(uint64_t now_us) { return canopen_.next_deadline_us(now_us); }
   void on_bus_event(BusEvent event, uint64_t now_us) { canopen_.on_bus_event(event, now_us); }
   void on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
     canopen_.on_receive_overruns(socket_total, now_us);
@@ -58,6 +61,7 @@ class Device final : private Application {
  private:
   // Application: what the CanopenNode calls.
   void advance(uint64_t now_us) override;
+  uint64_t next_advance_us(uint64_t now_us) override;
   void reset_application(uint64_t now_us) override;
   void sync(uint64_t now_us) override;
   void state_changed(NmtState state, uint64_t now_us) override;

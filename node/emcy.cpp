@@ -1,5 +1,7 @@
 #include "node/emcy.hpp"
 
+#include <algorithm>
+
 #include "od/communication_objects.hpp"
 
 namespace stepnode::node {
@@ -74,6 +76,13 @@ void EmcyProducer::on_tick(uint64_t now_us) {
     last_sent_us_ = now_us;
     sent_any_ = true;
   }
+}
+
+uint64_t EmcyProducer::next_deadline_us(uint64_t now_us) const {
+  if (!enabled_ || pending_.empty()) return kNoDeadline;
+  if (!sent_any_) return now_us;
+  const uint64_t inhibit_us = uint64_t{dictionary_.get<uint16_t>(0x1015, 0)} * 100;
+  return std::max(now_us, last_sent_us_ + inhibit_us);
 }
 
 void EmcyProducer::reset() {

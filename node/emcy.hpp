@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 
+#include "node/deadline.hpp"
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
 
@@ -60,6 +61,10 @@ class EmcyProducer {
   void set_enabled(bool enabled) { enabled_ = enabled; }
   // Sends queued messages whose inhibit time has passed.
   void on_tick(uint64_t now_us);
+  // A queued message waits for the inhibit time 0x1015 (x 100 us) after the last one sent;
+  // kNoDeadline with nothing queued or while sending is not allowed (enabling is a state
+  // change, after which the node runs its services).
+  uint64_t next_deadline_us(uint64_t now_us) const;
   // Reset node: forget everything (history included).
   void reset();
 

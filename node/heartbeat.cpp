@@ -22,6 +22,11 @@ void HeartbeatProducer::on_tick(NmtState state, uint64_t now_us) {
   }
 }
 
+uint64_t HeartbeatProducer::next_deadline_us() const {
+  const uint64_t period_us = uint64_t{dictionary_.get<uint16_t>(0x1017, 0)} * 1000;
+  return period_us ? last_sent_us_ + period_us : kNoDeadline;
+}
+
 HeartbeatConsumer::HeartbeatConsumer(od::Dictionary& dictionary, Events events)
     : dictionary_(dictionary), events_(std::move(events)) {
   load();
@@ -58,6 +63,14 @@ bool HeartbeatConsumer::any_timed_out() const {
   for (const auto& s : slots_)
     if (s.timed_out) return true;
   return false;
+}
+
+uint64_t HeartbeatConsumer::next_deadline_us() const {
+  uint64_t next = kNoDeadline;
+  for (const auto& s : slots_)
+    if (s.started && !s.timed_out && s.time_ms != 0 && s.node != 0)
+      next = earliest(next, s.last_us + uint64_t{s.time_ms} * 1000 + 1);
+  return next;
 }
 
 void HeartbeatConsumer::on_frame(const od::CanFrame& frame, uint64_t now_us) {

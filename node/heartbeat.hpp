@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <functional>
 
+#include "node/deadline.hpp"
+
 #include "node/nmt.hpp"
 #include "od/can_frame.hpp"
 #include "od/communication_objects.hpp"
@@ -19,6 +21,9 @@ class HeartbeatProducer {
   // Sends the heartbeat now (state changes are confirmed at once) and restarts the period.
   void send_now(NmtState state, uint64_t now_us);
   void on_tick(NmtState state, uint64_t now_us);
+  // When on_tick sends the next heartbeat: the last one + 0x1017 ms (CiA 301 7.2.8.3.2.2);
+  // kNoDeadline while 0x1017 is 0.
+  uint64_t next_deadline_us() const;
   // A node-ID configured over LSS, in effect from the reset communication that applies it.
   void set_node_id(uint8_t node_id) { node_id_ = node_id; }
 
@@ -51,6 +56,9 @@ class HeartbeatConsumer {
   void reconfigure();
   bool timed_out(uint8_t node) const;
   bool any_timed_out() const;
+  // The first moment on_tick finds a monitored node late: its last heartbeat + its
+  // consumer time + 1 us (late is "more than" the consumer time); kNoDeadline if none runs.
+  uint64_t next_deadline_us() const;
 
  private:
   struct Slot {

@@ -1,8 +1,11 @@
 // stepnode: the node process. Connects the CANopen node to a SocketCAN interface and to
-// CLOCK_MONOTONIC through an epoll loop with a timerfd tick.
+// CLOCK_MONOTONIC through an epoll loop with one timerfd, armed after every frame and tick
+// for the node's earliest deadline (issue 13: an idle node sleeps), never longer than
+// --tick-us.
 #include <linux/can/error.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <iostream>
@@ -112,6 +115,21 @@ int run(node::NodeConfig cfg) {
     notifier.ready();
   };
   if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
+  // The node's timed work: one absolute timer for its earliest deadline. A frame the
+  // controller could not take yet is retried within a poll period, as the tick did.
+  int timer = -1;
+  auto arm_for_next_deadline = [&] {
+    const uint64_t now = canio::EventLoop::now_us();
+    uint64_t at = std::min(device.next_deadline_us(now), now + cfg.tick_us);
+    if (can.has_pending() || !ready_sent) at = std::min(at, node::poll_deadline(now));
+    loop.arm_at(timer, at);
+  };
+  timer = loop.add_timer([&] {
+    device.on_tick(canio::EventLoop::now_us());
+    can.flush();
+    tell_ready_once_sent();
+    arm_for_next_deadline();
+  });
   loop.watch(can.fd(), [&] {
     while (auto r = can.receive()) {
       uint64_t now = canio::EventLoop::now_us();
@@ -124,11 +142,7 @@ int run(node::NodeConfig cfg) {
       device.on_frame(r->frame, now, arrival_us(*r, now));
     }
     device.on_receive_overruns(can.receive_overruns(), canio::EventLoop::now_us());
-  });
-  loop.every(cfg.tick_us, [&] {
-    device.on_tick(canio::EventLoop::now_us());
-    can.flush();
-    tell_ready_once_sent();
+    arm_for_next_deadline();  // a frame may have started a motion, a transfer, a timer
   });
   if (device.canopen().configured())
     spdlog::info("node {} on {}, {} axes, parameters in {}", device.canopen().node_id(), cfg.iface,
@@ -140,8 +154,9 @@ int run(node::NodeConfig cfg) {
   device.start(canio::EventLoop::now_us());
   can.flush();
   tell_ready_once_sent();
+  arm_for_next_deadline();
   loop.run();
-  spdlog::info("stopping");
+  spdlog::info("stopping after {} wake-ups", loop.wakeups());
   notifier.stopping();
   can.flush();
   return 0;

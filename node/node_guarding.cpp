@@ -41,6 +41,12 @@ void NodeGuarding::on_tick(uint64_t now_us) {
   if (events_.lost) events_.lost(now_us);
 }
 
+uint64_t NodeGuarding::next_deadline_us() const {
+  const uint64_t life_time = heartbeat_in_use() ? 0 : life_time_us();
+  if (lost_ || !started_ || life_time == 0) return kNoDeadline;
+  return last_request_us_ + life_time + 1;
+}
+
 void NodeGuarding::reset() {
   toggle_ = false;
   started_ = false;

@@ -13,6 +13,8 @@
 #include <functional>
 #include <optional>
 
+#include "node/deadline.hpp"
+
 #include "node/nmt.hpp"
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
@@ -36,6 +38,10 @@ class NodeGuarding {
   // sent now; nullopt for any other frame, in Initialising, or while heartbeat is in use.
   std::optional<od::CanFrame> on_frame(const od::CanFrame& frame, NmtState state, uint64_t now_us);
   void on_tick(uint64_t now_us);
+  // The first moment on_tick finds the node life time passed since the last request (+1
+  // us: "within" the life time is not late); kNoDeadline while life guarding does not run.
+  // Guarding switched off while lost is a write, and every write is followed by a tick.
+  uint64_t next_deadline_us() const;
   // NMT reset communication: the toggle bit back to 0; life guarding waits for a first
   // request again (a lost guarding is over with the reset, as the EMCY state is).
   void reset();

@@ -196,6 +196,7 @@ void PdoEngine::transmit(Tpdo& t, std::vector<uint8_t> data, uint64_t now_us) {
   t.sent_any = true;
   t.send_request = false;
   t.event_pending = false;
+  t.held = false;
 }
 
 void PdoEngine::on_sync(uint8_t counter, uint64_t sync_us, uint64_t now_us) {
@@ -269,9 +270,29 @@ void PdoEngine::on_tick(uint64_t now_us) {
       changed = ((data[i] ^ t.last_data[i]) & t.event_mask[i]) != 0;
     bool timer = t.event_us && now_us - t.last_sent_us >= t.event_us;
     if (!(changed || timer || t.send_request)) continue;
-    if (t.sent_any && now_us - t.last_sent_us < t.inhibit_us) continue;  // retried next tick
+    if (t.sent_any && now_us - t.last_sent_us < t.inhibit_us) {
+      t.held = true;  // retried once the inhibit time has passed (next_deadline_us)
+      continue;
+    }
     transmit(t, std::move(data), now_us);
   }
+}
+
+uint64_t PdoEngine::next_deadline_us(uint64_t now_us) const {
+  if (dirty_) return now_us;  // the configuration is read again on the next tick
+  if (!running_) return kNoDeadline;
+  uint64_t next = kNoDeadline;
+  for (const auto& r : rpdos_)
+    if (r.valid && r.monitoring && !r.timed_out && r.event_ms)
+      next = earliest(next, r.last_rx_us + uint64_t{r.event_ms} * 1000 + 1);
+  for (const auto& t : tpdos_) {
+    if (!t.valid || t.type <= 240) continue;
+    if (!t.sent_any) return now_us;
+    const uint64_t inhibit_end = t.last_sent_us + t.inhibit_us;
+    if (t.held || t.send_request) next = earliest(next, std::max(now_us, inhibit_end));
+    if (t.event_us) next = earliest(next, std::max(t.last_sent_us + t.event_us, inhibit_end));
+  }
+  return next;
 }
 
 }  // namespace stepnode::node

@@ -7,6 +7,7 @@
 #include <functional>
 #include <vector>
 
+#include "node/deadline.hpp"
 #include "node/emcy.hpp"
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
@@ -28,6 +29,12 @@ class PdoEngine {
   // A SYNC that reached the interface at `sync_us` (<= now_us), handled at `now_us`.
   void on_sync(uint8_t counter, uint64_t sync_us, uint64_t now_us);
   void on_tick(uint64_t now_us);
+  // When on_tick next has timed work (CiA 301 7.5.2.35/36): an RPDO's deadline (its last
+  // frame + event time + 1 us), an event-driven TPDO's event timer (last sent + event
+  // time, not before its inhibit time) and a change held back by the inhibit time (last
+  // sent + inhibit time). A change of a mapped value is found on the tick that follows
+  // the frame or advance that made it, so it needs no deadline. kNoDeadline: none.
+  uint64_t next_deadline_us(uint64_t now_us) const;
   // Entering operational: event-driven TPDOs go out once with the current values.
   void start(uint64_t now_us);
   // Leaving operational: forget pending data and timers.
@@ -71,6 +78,7 @@ class PdoEngine {
     std::vector<uint8_t> event_mask;  // bits whose change is an event (see Entry::pdo_sampled)
     bool sent_any = false, send_request = false, event_pending = false;
     bool waiting_sync_start = false;
+    bool held = false;  // an event waits for the inhibit time to pass
     uint64_t last_sent_us = 0;
     unsigned sync_count = 0;
   };

@@ -5,6 +5,8 @@
 #pragma once
 #include <cstdint>
 
+#include "node/deadline.hpp"
+
 namespace stepnode::node {
 
 class Profile {
@@ -16,6 +18,10 @@ class Profile {
   virtual void power_up(uint64_t /*now_us*/) {}
   // The axes were advanced to `now_us`: the profile's own timed work.
   virtual void advance(uint64_t /*now_us*/) {}
+  // When the profile's own timed work next needs an advance (absolute us), besides the
+  // axes' steps, which the AxisBank reports. Conservative by default: a profile that does
+  // not say is advanced every poll period (node/deadline.hpp), as before issue 13.
+  virtual uint64_t next_advance_us(uint64_t now_us) { return poll_deadline(now_us); }
   // Its readings into the dictionary (the TPDOs carry them).
   virtual void publish() {}
   // A SYNC (TRIG SYS), received at `frame_us` <= now_us (its arrival on the bus).

@@ -42,6 +42,13 @@ void SdoServerChannels::on_tick(uint64_t now_us) {
   send_all();
 }
 
+uint64_t SdoServerChannels::next_deadline_us(uint64_t now_us) const {
+  if (changed_) return now_us;
+  for (const Channel& ch : channels_)
+    if (ch.ids.valid && ch.server->busy()) return poll_deadline(now_us);
+  return kNoDeadline;
+}
+
 void SdoServerChannels::reset() {
   for (Channel& ch : channels_) ch.server->reset();
 }

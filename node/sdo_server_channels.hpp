@@ -12,6 +12,7 @@
 
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
+#include "node/deadline.hpp"
 #include "od/sdo_server.hpp"
 #include "od/sdo_server_parameter.hpp"
 
@@ -27,6 +28,11 @@ class SdoServerChannels {
   bool on_frame(const od::CanFrame& frame, uint64_t now_us);
   // Server-side timeouts of every channel.
   void on_tick(uint64_t now_us);
+  // A transfer in progress times out in on_tick (SDO protocol timed out, 0x05040000); the
+  // server keeps its timer to itself (od/sdo_server), so while one runs this is the
+  // conservative poll deadline, the timeout found to within a poll period as before.
+  // kNoDeadline with every channel idle.
+  uint64_t next_deadline_us(uint64_t now_us) const;
   // Drops every transfer in progress, without a frame (NMT states without SDO, resets).
   void reset();
   // Takes the COB-IDs from the dictionary again (after a restore of stored values); a

@@ -33,6 +33,11 @@ void SyncService::reset(uint64_t now_us) {
   next_us_ = now_us;
 }
 
+uint64_t SyncService::next_deadline_us(uint64_t now_us) const {
+  if (!producer()) return running_ ? now_us : kNoDeadline;  // on_tick stops the producer
+  return running_ ? next_us_ : now_us;
+}
+
 void SyncService::on_tick(uint64_t now_us) {
   if (!producer()) {
     running_ = false;

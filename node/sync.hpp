@@ -4,6 +4,8 @@
 #include <functional>
 #include <optional>
 
+#include "node/deadline.hpp"
+
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
 
@@ -25,6 +27,9 @@ class SyncService {
   // Produces SYNC when 0x1005 bit 30 is set and 0x1006 is not 0.
   void on_tick(uint64_t now_us);
   void reset(uint64_t now_us);  // restart the producer's period and counter
+  // A producer's next SYNC (the last + 0x1006 us; not yet started: at once, on_tick starts
+  // the period); kNoDeadline for a consumer.
+  uint64_t next_deadline_us(uint64_t now_us) const;
 
   uint32_t cob_id() const { return dictionary_.get<uint32_t>(0x1005, 0) & 0x7FF; }
   bool producer() const;

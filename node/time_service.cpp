@@ -74,6 +74,12 @@ void TimeService::reset(uint64_t now_us) {
   producing_ = false;
 }
 
+uint64_t TimeService::next_deadline_us(uint64_t now_us) const {
+  const uint16_t period_ms = dictionary_.get<uint16_t>(kNetworkTime, kTimeProducerPeriodSub);
+  if (!producer() || period_ms == 0) return producing_ ? now_us : kNoDeadline;
+  return producing_ ? next_us_ : now_us;
+}
+
 void TimeService::on_tick(uint64_t now_us) {
   now_us_ = now_us;
   const uint16_t period_ms = dictionary_.get<uint16_t>(kNetworkTime, kTimeProducerPeriodSub);

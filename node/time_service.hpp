@@ -7,6 +7,7 @@
 #include <functional>
 #include <optional>
 
+#include "node/deadline.hpp"
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
 
@@ -41,6 +42,8 @@ class TimeService {
   bool on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t arrival_us = 0);
   // Produces TIME every 0x2F12:5 ms when 0x1012 bit 30 is set.
   void on_tick(uint64_t now_us);
+  // A producer's next TIME stamp (0x1012 bit 30 and a period set); kNoDeadline otherwise.
+  uint64_t next_deadline_us(uint64_t now_us) const;
   // Reset communication: the producer's period restarts, the network time is forgotten.
   void reset(uint64_t now_us);
 

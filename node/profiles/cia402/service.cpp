@@ -153,6 +153,16 @@ void Cia402Service::master_back(uint64_t) {
   for (auto& d : drives_) d->connection_restored();
 }
 
+uint64_t Cia402Service::next_advance_us(uint64_t now_us) {
+  for (const auto& d : drives_) {
+    const cia402::State s = d->state();
+    if (s == cia402::State::OperationEnabled || s == cia402::State::QuickStopActive ||
+        s == cia402::State::FaultReactionActive)
+      return poll_deadline(now_us);
+  }
+  return kNoDeadline;
+}
+
 void Cia402Service::publish() {
   for (unsigned a = 0; a < drives_.size(); ++a) publish(a);
 }

@@ -26,6 +26,10 @@ class Cia402Service final : public Profile {
   void configure(uint64_t now_us) override;
   void power_up(uint64_t now_us) override;
   void publish() override;
+  // A drive that may move (operation enabled, a quick stop or fault reaction running) has
+  // timed work inside the drive (cyclic interpolation, following error time-out): the
+  // conservative poll; any other state waits for a write.
+  uint64_t next_advance_us(uint64_t now_us) override;
   void master_lost(uint64_t now_us) override;
   void master_back(uint64_t now_us) override;
   // CSP, CSV, IP: the set-points of this cycle take effect (the SYNC's arrival times the cycle).

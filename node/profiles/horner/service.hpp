@@ -24,6 +24,9 @@ class HornerService final : public Profile {
   // The words as stored, refused RPDO words forgotten.
   void power_up(uint64_t now_us) override;
   void publish() override;
+  // No timed work of its own: the register front ends run in the axes' advance (AxisBank
+  // reports their deadlines) and the words act when written.
+  uint64_t next_advance_us(uint64_t) override { return kNoDeadline; }
 
  private:
   void install_hooks();

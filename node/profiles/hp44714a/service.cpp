@@ -280,6 +280,21 @@ void HpService::publish(unsigned a) {
   }
 }
 
+uint64_t HpService::next_advance_us(uint64_t now_us) {
+  for (unsigned a = 0; a < channels_.size(); ++a) {
+    const motion::hp::Channel& ch = *channels_[a];
+    const motion::AxisCore& core = axes_.core(a);
+    // Another front end's job (a Horner move): its steps are the axes' deadlines; STANDBY
+    // AUTO keeps the motor powered throughout and starts its power-off timer at the end.
+    if (core.busy() && !core.owned_by(ch)) continue;
+    const motion::hp::Done d = ch.done();
+    const bool auto_off_due = ch.standby_mode() == motion::hp::StandbyMode::Auto && ch.motor_powered();
+    if (d == motion::hp::Done::Running || d == motion::hp::Done::SustainRunning || auto_off_due)
+      return poll_deadline(now_us);
+  }
+  return kNoDeadline;
+}
+
 void HpService::advance(uint64_t) {
   for (auto& ch : channels_) ch->advance_to(now());
 }

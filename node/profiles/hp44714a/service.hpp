@@ -26,6 +26,10 @@ class HpService final : public Profile {
   // The channels' timed work (DELAY, triggers, the end of a move) up to `now_us`.
   void advance(uint64_t now_us) override;
   void publish() override;
+  // A channel's own timed work (a DELAY, a pulse train, reaching a SUSTAIN velocity,
+  // STANDBY AUTO's power-off after the motion) is kept inside the channel, so while any
+  // of it may be due this is the conservative poll; an idle channel needs nothing.
+  uint64_t next_advance_us(uint64_t now_us) override;
   // Power-up / NMT reset node, after the axes: the channels' power-on state, then their
   // stored settings.
   void power_up(uint64_t now_us) override;

@@ -17,6 +17,9 @@ class SimService final : public Profile {
   // The machine's settings as stored, before the axes power up.
   void configure(uint64_t now_us) override;
   void publish() override;
+  // No timed work of its own: the machine's edges come from the steps (the axes' deadlines)
+  // and its objects act when written.
+  uint64_t next_advance_us(uint64_t) override { return kNoDeadline; }
 
  private:
   sim::Machine& machine() { return axes_.machine(); }
