@@ -38,6 +38,12 @@ struct ObserverConfig {
   // master's (a second bridge reading the same object), and must count as traffic.
   bool own_frames_echoed = false;
   std::vector<NodeSdoChannel> sdo_channels;  // nodes not named here: the default channel
+  // The bridge's SDO reads on the whole bus (issue 13, bridge/observer/transfer_pacer.hpp):
+  // at most this many transfers in flight at once, over all nodes ...
+  uint32_t sdo_max_outstanding = 8;
+  // ... and at most this many transfer starts per second on average; 0: no rate bound,
+  // as fast as the answers come (stepbridge's default is 1000, bridge/config.hpp).
+  uint32_t sdo_rate_per_s = 0;
 };
 
 // A frame as the socket delivered it.
