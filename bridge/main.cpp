@@ -59,6 +59,9 @@ int run(const bridge::BridgeConfig& cfg) {
   observer_config.heartbeat_timeout_ms = cfg.heartbeat_timeout_ms;
   observer_config.sdo_timeout_ms = cfg.sdo_timeout_ms;
   observer_config.sdo_channels = cfg.sdo_channels;
+  observer_config.sdo_max_outstanding = cfg.sdo_max_outstanding;
+  observer_config.sdo_rate_per_s = cfg.sdo_rate_per_s;
+  observer_config.network_time = cfg.network_time;
   bridge::BusObserver observer(publisher, observer_config);
 
   std::vector<od::CanFrame> out;

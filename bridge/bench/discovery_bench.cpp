@@ -5,6 +5,7 @@
 // load, the observer's host time and the memory it holds per node. Asserts nothing.
 //   build/bridge/discovery_bench [--nodes 127] [--loss 0.01] [--seed 1] [--rate 1000]
 //                                [--outstanding 8] [--bit-rate 500000] [--limit-s 600]
+//                                [--node-tick-us 1000]   (10000: the nodes cost less under callgrind)
 // The observer's instructions alone (deterministic, so the count repeats):
 //   valgrind --tool=callgrind --toggle-collect='stepnode::bridge::BusObserver::on_*'
 //            build/bridge/discovery_bench --nodes 127    (one line)
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--outstanding")) o.observer.sdo_max_outstanding = static_cast<uint32_t>(std::atoi(v));
     else if (!std::strcmp(argv[i], "--bit-rate")) o.bit_rate = static_cast<uint32_t>(std::atoi(v));
     else if (!std::strcmp(argv[i], "--limit-s")) limit_s = std::strtoull(v, nullptr, 10);
+    else if (!std::strcmp(argv[i], "--node-tick-us")) o.node_tick_us = std::strtoull(v, nullptr, 10);
   }
   if (o.nodes < 1 || o.nodes > 127) {
     std::fprintf(stderr, "discovery_bench: --nodes must be 1..127\n");
@@ -98,6 +100,8 @@ int main(int argc, char** argv) {
   }
   std::printf("nodes                    %u (%u axes each, heartbeat %u ms), %u bit/s, loss %.3f %%\n", o.nodes,
               o.axes, o.heartbeat_ms, o.bit_rate, 100 * o.loss);
+  std::printf("node tick                %llu us, bridge tick %llu us\n", static_cast<unsigned long long>(o.node_tick_us),
+              static_cast<unsigned long long>(o.bridge_tick_us));
   std::printf("pacing                   %u transfers in flight, %u starts/s\n", o.observer.sdo_max_outstanding,
               o.observer.sdo_rate_per_s);
   std::printf("discovered               %u of %u after %.3f s (virtual)\n", bus.discovered(), o.nodes,

@@ -11,6 +11,7 @@
 #include "bridge/observer/discovery_plan.hpp"
 #include "bridge/observer/emcy_decoder.hpp"
 #include "bridge/observer/heartbeat_monitor.hpp"
+#include "bridge/observer/network_time.hpp"
 #include "bridge/observer/retry_backoff.hpp"
 #include "bridge/observer/sdo_channel.hpp"
 #include "bridge/observer/tpdo_decoder.hpp"
@@ -83,6 +84,7 @@ struct BusObserver::Impl {
   std::array<uint8_t, 0x800> sdo_channel_node{};
   uint32_t random = 1;  // xorshift32 state for the collision jitter
   TransferPacer pacer;  // the bridge's transfers on the whole bus (issue 13)
+  NetworkTime network_time;  // used with config.network_time
   unsigned next_first = 1;  // the node the next round of starts begins with
 
   uint32_t next_random() {
@@ -133,6 +135,11 @@ BusObserver::~BusObserver() = default;
 
 const BusCounters& BusObserver::counters() const { return impl_->counters; }
 
+std::optional<int64_t> BusObserver::network_time_offset_ns() const {
+  if (!impl_->network_time.known()) return std::nullopt;
+  return impl_->network_time.offset_ns();
+}
+
 NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
   if (node == 0 || node >= kNodeIds || !impl_->nodes[node]) {
     NodeHealthSample s;
@@ -143,12 +150,21 @@ NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
   return impl_->health_now(*impl_->nodes[node], now_us);
 }
 
-void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector<od::CanFrame>& out) {
+void BusObserver::on_frame(const ObservedFrame& received, uint64_t now_us, std::vector<od::CanFrame>& out) {
   Impl& m = *impl_;
   ++m.counters.frames;
-  if (of.error_frame) return count_error_frame(m.counters, of.error_class, of.controller_status);
-  const od::CanFrame& f = of.frame;
+  if (received.error_frame)
+    return count_error_frame(m.counters, received.error_class, received.controller_status);
+  const od::CanFrame& f = received.frame;
   if (f.id > 0x7FF || f.dlc > 8) return m.bad(nullptr);
+  // The frame with its timestamp on the network's clock, when that is asked for and known.
+  ObservedFrame on_network_clock;
+  const bool remap = m.config.network_time && m.network_time.known();
+  if (remap) {
+    on_network_clock = received;
+    on_network_clock.can_time_ns = m.network_time.to_network(received.can_time_ns);
+  }
+  const ObservedFrame& of = remap ? on_network_clock : received;
 
   uint8_t tpdo_node = 0;
   if (!f.rtr) {
@@ -173,6 +189,11 @@ void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector
     return;
   }
   if (uint8_t owner = m.sdo_channel_node[f.id]) return m.on_sdo(owner, of, now_us, out);
+  if (f.id == od::cob::kTimeStamp && m.config.network_time) {
+    // The stamp names the instant the frame was on the bus: its own kernel timestamp.
+    if (!m.network_time.on_time(f, received.can_time_ns)) m.bad(nullptr);
+    return;
+  }
   const auto id = static_cast<uint8_t>(f.id & 0x7F);
   const uint32_t function = f.id & 0x780;
   if (f.id == od::cob::kNmt) return;  // NMT commands: the heartbeats that follow tell the state

@@ -5,8 +5,9 @@
 //  - at most `max_outstanding` transfers in flight on the whole bus: the bridge is
 //    self-clocked by the answers, and never has more than that many requests queued;
 //  - transfer starts at most `rate_per_s` on average (a generic cell rate algorithm: a
-//    start is allowed while the theoretical arrival time is no more than `burst` starts
-//    ahead of now), so a long discovery stays a fixed fraction of the bus.
+//    start is allowed while the theoretical arrival time is at most max_outstanding - 1
+//    intervals ahead of now, so a burst is at most max_outstanding starts), so a long
+//    discovery stays a fixed fraction of the bus.
 // Pure, no clock: time is passed in.
 #pragma once
 #include <algorithm>
@@ -20,7 +21,7 @@ class TransferPacer {
   TransferPacer(uint32_t max_outstanding, uint32_t rate_per_s)
       : max_outstanding_(std::max<uint32_t>(max_outstanding, 1)),
         interval_us_(rate_per_s ? 1'000'000 / rate_per_s : 0),
-        tolerance_us_(interval_us_ * max_outstanding_) {}
+        tolerance_us_(interval_us_ * (max_outstanding_ - 1)) {}
 
   bool may_start(uint64_t now_us) const {
     if (outstanding_ >= max_outstanding_) return false;
