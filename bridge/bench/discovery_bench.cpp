@@ -5,7 +5,8 @@
 // load, the observer's host time and the memory it holds per node. Asserts nothing.
 //   build/bridge/discovery_bench [--nodes 127] [--loss 0.01] [--seed 1] [--rate 1000]
 //                                [--outstanding 8] [--bit-rate 500000] [--limit-s 600]
-//                                [--node-tick-us 1000]   (10000: the nodes cost less under callgrind)
+//                                [--node-tick-us 1000]   (10000: the nodes cost less under
+//                                callgrind)
 // The observer's instructions alone (deterministic, so the count repeats):
 //   valgrind --tool=callgrind --toggle-collect='stepnode::bridge::BusObserver::on_*'
 //            build/bridge/discovery_bench --nodes 127    (one line)
@@ -71,11 +72,14 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--nodes")) o.nodes = static_cast<unsigned>(std::atoi(v));
     else if (!std::strcmp(argv[i], "--loss")) o.loss = std::atof(v);
     else if (!std::strcmp(argv[i], "--seed")) o.seed = static_cast<uint32_t>(std::atoi(v));
-    else if (!std::strcmp(argv[i], "--rate")) o.observer.sdo_rate_per_s = static_cast<uint32_t>(std::atoi(v));
-    else if (!std::strcmp(argv[i], "--outstanding")) o.observer.sdo_max_outstanding = static_cast<uint32_t>(std::atoi(v));
+    else if (!std::strcmp(argv[i], "--rate"))
+      o.observer.sdo_rate_per_s = static_cast<uint32_t>(std::atoi(v));
+    else if (!std::strcmp(argv[i], "--outstanding"))
+      o.observer.sdo_max_outstanding = static_cast<uint32_t>(std::atoi(v));
     else if (!std::strcmp(argv[i], "--bit-rate")) o.bit_rate = static_cast<uint32_t>(std::atoi(v));
     else if (!std::strcmp(argv[i], "--limit-s")) limit_s = std::strtoull(v, nullptr, 10);
-    else if (!std::strcmp(argv[i], "--node-tick-us")) o.node_tick_us = std::strtoull(v, nullptr, 10);
+    else if (!std::strcmp(argv[i], "--node-tick-us"))
+      o.node_tick_us = std::strtoull(v, nullptr, 10);
   }
   if (o.nodes < 1 || o.nodes > 127) {
     std::fprintf(stderr, "discovery_bench: --nodes must be 1..127\n");
@@ -98,30 +102,36 @@ int main(int argc, char** argv) {
     total += s.requests_to[id];
     retries += bus.observer().node_health(static_cast<uint8_t>(id), bus.now_us()).sdo_failures;
   }
-  std::printf("nodes                    %u (%u axes each, heartbeat %u ms), %u bit/s, loss %.3f %%\n", o.nodes,
-              o.axes, o.heartbeat_ms, o.bit_rate, 100 * o.loss);
-  std::printf("node tick                %llu us, bridge tick %llu us\n", static_cast<unsigned long long>(o.node_tick_us),
+  std::printf(
+      "nodes                    %u (%u axes each, heartbeat %u ms), %u bit/s, loss %.3f %%\n",
+      o.nodes, o.axes, o.heartbeat_ms, o.bit_rate, 100 * o.loss);
+  std::printf("node tick                %llu us, bridge tick %llu us\n",
+              static_cast<unsigned long long>(o.node_tick_us),
               static_cast<unsigned long long>(o.bridge_tick_us));
-  std::printf("pacing                   %u transfers in flight, %u starts/s\n", o.observer.sdo_max_outstanding,
-              o.observer.sdo_rate_per_s);
-  std::printf("discovered               %u of %u after %.3f s (virtual)\n", bus.discovered(), o.nodes,
-              static_cast<double>(t) / 1e6);
-  std::printf("sdo_requests_per_node    min %llu  mean %.1f  max %llu\n", static_cast<unsigned long long>(min),
-              static_cast<double>(total) / o.nodes, static_cast<unsigned long long>(max));
+  std::printf("pacing                   %u transfers in flight, %u starts/s\n",
+              o.observer.sdo_max_outstanding, o.observer.sdo_rate_per_s);
+  std::printf("discovered               %u of %u after %.3f s (virtual)\n", bus.discovered(),
+              o.nodes, static_cast<double>(t) / 1e6);
+  std::printf("sdo_requests_per_node    min %llu  mean %.1f  max %llu\n",
+              static_cast<unsigned long long>(min), static_cast<double>(total) / o.nodes,
+              static_cast<unsigned long long>(max));
   std::printf("retries                  %llu (failed transfers, each tried again)\n",
               static_cast<unsigned long long>(retries));
   std::printf("bus                      %llu frames, load %.1f %%, %llu deliveries dropped\n",
-              static_cast<unsigned long long>(s.frames), 100.0 * static_cast<double>(s.busy_ns) / (static_cast<double>(t) * 1e3),
+              static_cast<unsigned long long>(s.frames),
+              100.0 * static_cast<double>(s.busy_ns) / (static_cast<double>(t) * 1e3),
               static_cast<unsigned long long>(s.dropped));
   std::printf("observer_host_time       %.1f ms in %llu calls (%.0f ns per call)\n",
-              static_cast<double>(s.observer_ns) / 1e6, static_cast<unsigned long long>(s.observer_calls),
+              static_cast<double>(s.observer_ns) / 1e6,
+              static_cast<unsigned long long>(s.observer_calls),
               static_cast<double>(s.observer_ns) / static_cast<double>(s.observer_calls));
   const uint64_t frame_calls = s.observer_calls - s.observer_ticks;
-  std::printf("observer_per_frame       %.0f ns (%llu frames); per tick %.0f ns (%llu ticks)\n",
-              static_cast<double>(s.observer_ns - s.observer_tick_ns) / static_cast<double>(frame_calls),
-              static_cast<unsigned long long>(frame_calls),
-              static_cast<double>(s.observer_tick_ns) / static_cast<double>(s.observer_ticks),
-              static_cast<unsigned long long>(s.observer_ticks));
+  std::printf(
+      "observer_per_frame       %.0f ns (%llu frames); per tick %.0f ns (%llu ticks)\n",
+      static_cast<double>(s.observer_ns - s.observer_tick_ns) / static_cast<double>(frame_calls),
+      static_cast<unsigned long long>(frame_calls),
+      static_cast<double>(s.observer_tick_ns) / static_cast<double>(s.observer_ticks),
+      static_cast<unsigned long long>(s.observer_ticks));
   std::printf("observer_memory          %lld bytes (%.0f per node)\n", g_observer_bytes,
               static_cast<double>(g_observer_bytes) / o.nodes);
   return bus.all_discovered() ? 0 : 1;

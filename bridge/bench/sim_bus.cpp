@@ -14,14 +14,16 @@ constexpr uint64_t kRealtimeEpochNs = 1'700'000'000ull * 1'000'000'000ull;
 
 // Host time spent in one observer call, for the CPU figure.
 struct Timed {
-  Timed(SimBusStats& s, void (*scope)(bool)) : stats(s), scope(scope), start(std::chrono::steady_clock::now()) {
+  Timed(SimBusStats& s, void (*scope)(bool))
+      : stats(s), scope(scope), start(std::chrono::steady_clock::now()) {
     if (scope) scope(true);
   }
   ~Timed() {
     if (scope) scope(false);
     ++stats.observer_calls;
-    stats.observer_ns += static_cast<uint64_t>(
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count());
+    stats.observer_ns += static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                   std::chrono::steady_clock::now() - start)
+                                                   .count());
   }
   SimBusStats& stats;
   void (*scope)(bool);
@@ -31,7 +33,9 @@ struct Timed {
 }  // namespace
 
 SimBus::SimBus(SimBusOptions options, SampleSink& sink)
-    : options_(std::move(options)), observer_(sink, options_.observer), stations_(options_.nodes + 1),
+    : options_(std::move(options)),
+      observer_(sink, options_.observer),
+      stations_(options_.nodes + 1),
       random_(options_.seed ? options_.seed : 1) {
   stats_.requests_to.assign(options_.nodes + 1, 0);
   for (unsigned id = 1; id <= options_.nodes; ++id) {
@@ -41,7 +45,8 @@ SimBus::SimBus(SimBusOptions options, SampleSink& sink)
     o.state_dir = options_.state_dir;
     const node::Device::ObjectDefaults defaults = {{"1017", std::to_string(options_.heartbeat_ms)}};
     Station& s = stations_[id];
-    s.device = std::make_unique<node::Device>(o, defaults, [&s](const od::CanFrame& f) { s.queue.push_back(f); });
+    s.device = std::make_unique<node::Device>(
+        o, defaults, [&s](const od::CanFrame& f) { s.queue.push_back(f); });
     s.boot_at_ns = options_.boot_spread_us ? next_random() % options_.boot_spread_us * 1000 : 0;
   }
 }
@@ -133,7 +138,9 @@ void SimBus::deliver(unsigned sender, const od::CanFrame& frame) {
 bool SimBus::passes_filter(unsigned node, const od::CanFrame& f) const {
   if (!options_.node_filters) return true;
   constexpr uint32_t kLssMasterToSlave = 0x7E5;  // CiA 305
-  if (f.id == od::cob::kNmt || f.id == od::cob::kSync || f.id == od::cob::kTimeStamp || f.id == kLssMasterToSlave) return true;
+  if (f.id == od::cob::kNmt || f.id == od::cob::kSync || f.id == od::cob::kTimeStamp ||
+      f.id == kLssMasterToSlave)
+    return true;
   return (f.id & 0x7F) == node;
 }
 

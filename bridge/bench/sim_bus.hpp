@@ -24,16 +24,16 @@ class Device;
 namespace stepnode::bridge::sim {
 
 struct SimBusOptions {
-  unsigned nodes = 127;                // node-IDs 1..nodes
-  unsigned axes = 3;                   // per node (the node's default layout otherwise)
-  uint32_t bit_rate = 500'000;         // bit/s
-  double loss = 0.0;                   // probability a delivery to a receiver is dropped
+  unsigned nodes = 127;         // node-IDs 1..nodes
+  unsigned axes = 3;            // per node (the node's default layout otherwise)
+  uint32_t bit_rate = 500'000;  // bit/s
+  double loss = 0.0;            // probability a delivery to a receiver is dropped
   uint32_t seed = 1;
-  uint16_t heartbeat_ms = 100;         // every node's 0x1017
-  uint64_t boot_spread_us = 100'000;   // nodes power up at random instants in this span
-  uint64_t node_tick_us = 1000;        // node/main.cpp's tick
-  uint64_t bridge_tick_us = 10'000;    // stepbridge's tick_ms
-  std::filesystem::path state_dir;     // where the nodes would store parameters
+  uint16_t heartbeat_ms = 100;        // every node's 0x1017
+  uint64_t boot_spread_us = 100'000;  // nodes power up at random instants in this span
+  uint64_t node_tick_us = 1000;       // node/main.cpp's tick
+  uint64_t bridge_tick_us = 10'000;   // stepbridge's tick_ms
+  std::filesystem::path state_dir;    // where the nodes would store parameters
   // Each node receives only the frames its kernel receive filter would pass (issue 13's
   // filters: the broadcast services NMT, SYNC, TIME, LSS, and every COB-ID whose low 7
   // bits are its node-ID, which covers its SDO, RPDOs, guarding and the node-ID check).
@@ -48,15 +48,15 @@ struct SimBusOptions {
 };
 
 struct SimBusStats {
-  std::vector<uint64_t> requests_to;   // SDO frames the bridge sent to node n (index n)
-  uint64_t bridge_frames = 0;          // every frame the bridge sent
-  uint64_t frames = 0;                 // frames on the bus
-  uint64_t busy_ns = 0;                // time the bus carried a frame
-  uint64_t dropped = 0;                // deliveries dropped (loss)
-  uint64_t observer_calls = 0;         // on_frame + on_tick calls of the observer
-  uint64_t observer_ns = 0;            // host time spent in them (steady clock)
-  uint64_t observer_ticks = 0;         // of which on_tick calls
-  uint64_t observer_tick_ns = 0;       // and their time
+  std::vector<uint64_t> requests_to;  // SDO frames the bridge sent to node n (index n)
+  uint64_t bridge_frames = 0;         // every frame the bridge sent
+  uint64_t frames = 0;                // frames on the bus
+  uint64_t busy_ns = 0;               // time the bus carried a frame
+  uint64_t dropped = 0;               // deliveries dropped (loss)
+  uint64_t observer_calls = 0;        // on_frame + on_tick calls of the observer
+  uint64_t observer_ns = 0;           // host time spent in them (steady clock)
+  uint64_t observer_ticks = 0;        // of which on_tick calls
+  uint64_t observer_tick_ns = 0;      // and their time
 };
 
 class SimBus {

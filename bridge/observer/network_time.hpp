@@ -31,7 +31,8 @@ class NetworkTime {
   bool known() const { return known_; }
   // A kernel receive timestamp on the network's clock (unchanged before the first TIME).
   uint64_t to_network(uint64_t can_time_ns) const {
-    return known_ ? static_cast<uint64_t>(static_cast<int64_t>(can_time_ns) + offset_ns_) : can_time_ns;
+    return known_ ? static_cast<uint64_t>(static_cast<int64_t>(can_time_ns) + offset_ns_)
+                  : can_time_ns;
   }
   int64_t offset_ns() const { return offset_ns_; }  // network minus host
 

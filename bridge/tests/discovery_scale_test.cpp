@@ -72,9 +72,11 @@ TEST(DiscoveryScale, WithoutLossEveryNodeTakesTheSameReads) {
   SimBus bus(options(dir, 16, 0.0), sink);
   bus.run(60'000'000, [&] { return bus.all_discovered(); });
   ASSERT_TRUE(bus.all_discovered());
-  for (unsigned id = 2; id <= 16; ++id) EXPECT_EQ(bus.stats().requests_to[id], bus.stats().requests_to[1]) << id;
+  for (unsigned id = 2; id <= 16; ++id)
+    EXPECT_EQ(bus.stats().requests_to[id], bus.stats().requests_to[1]) << id;
   for (unsigned id = 1; id <= 16; ++id)
-    EXPECT_EQ(bus.observer().node_health(static_cast<uint8_t>(id), bus.now_us()).sdo_failures, 0u) << id;
+    EXPECT_EQ(bus.observer().node_health(static_cast<uint8_t>(id), bus.now_us()).sdo_failures, 0u)
+        << id;
 }
 
 }  // namespace

@@ -26,7 +26,8 @@ struct Flood {
   uint64_t handled_at_first_tick = 0;
   unsigned ticks = 0;
   Flood() {
-    if (::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_NONBLOCK, 0, fds) != 0) throw std::runtime_error("socketpair");
+    if (::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_NONBLOCK, 0, fds) != 0)
+      throw std::runtime_error("socketpair");
     for (int i = 0; i < 16; ++i) put();  // a queue that is never empty
   }
   ~Flood() {
@@ -81,11 +82,19 @@ TEST(ReceiveBudget, AnUnboundedDrainStarvesTheTimerUntilTheFloodEnds) {
 
 TEST(ReceiveBudget, HandlesAtMostTheBudgetAndStopsWhenEmpty) {
   int left = 100;
-  auto receive = [&]() -> std::optional<int> { return left-- > 0 ? std::optional<int>(left) : std::nullopt; };
+  auto receive = [&]() -> std::optional<int> {
+    return left-- > 0 ? std::optional<int>(left) : std::nullopt;
+  };
   int seen = 0;
-  EXPECT_EQ(handle_frames(receive, [&](int) { ++seen; }, 64), 64u);
-  EXPECT_EQ(handle_frames(receive, [&](int) { ++seen; }, 64), 36u);
-  EXPECT_EQ(handle_frames(receive, [&](int) { ++seen; }, 64), 0u);
+  EXPECT_EQ(handle_frames(
+                receive, [&](int) { ++seen; }, 64),
+            64u);
+  EXPECT_EQ(handle_frames(
+                receive, [&](int) { ++seen; }, 64),
+            36u);
+  EXPECT_EQ(handle_frames(
+                receive, [&](int) { ++seen; }, 64),
+            0u);
   EXPECT_EQ(seen, 100);
 }
 

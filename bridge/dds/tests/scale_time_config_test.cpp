@@ -22,7 +22,8 @@ BridgeConfig parse_args(std::vector<std::string> args) {
 }
 
 std::string config_file(const std::string& text) {
-  auto path = std::filesystem::temp_directory_path() / ("bridge-scale-" + std::to_string(getpid()) + ".toml");
+  auto path = std::filesystem::temp_directory_path() /
+              ("bridge-scale-" + std::to_string(getpid()) + ".toml");
   std::ofstream(path) << text;
   return path.string();
 }
@@ -35,8 +36,9 @@ TEST(BridgeScaleConfig, DefaultsPaceAndStampOnTheHostClock) {
 }
 
 TEST(BridgeScaleConfig, FileKeysAndTheOption) {
-  const std::string file =
-      config_file("iface = \"vcan0\"\nsdo_max_outstanding = 4\nsdo_rate_per_s = 250\ntimestamps = \"network\"\n");
+  const std::string file = config_file(
+      "iface = \"vcan0\"\nsdo_max_outstanding = 4\nsdo_rate_per_s = 250\ntimestamps = "
+      "\"network\"\n");
   BridgeConfig cfg = parse_args({"--config", file});
   EXPECT_EQ(cfg.sdo_max_outstanding, 4u);
   EXPECT_EQ(cfg.sdo_rate_per_s, 250u);

@@ -18,13 +18,16 @@ constexpr uint64_t kNoonishUnixNs = (1'704'067'200ull * 1000 + 45'296'789) * 1'0
 TEST(NetworkTime, TimeOfDayIsMillisecondsAndDaysSince1984) {
   EXPECT_EQ(time_of_day_unix_ns(kNoonish), kNoonishUnixNs);
   // Midnight of 1984-01-01 itself: Unix second 441,763,200.
-  EXPECT_EQ(time_of_day_unix_ns(od::CanFrame(0x100, {0, 0, 0, 0, 0, 0})), 441'763'200ull * 1'000'000'000);
+  EXPECT_EQ(time_of_day_unix_ns(od::CanFrame(0x100, {0, 0, 0, 0, 0, 0})),
+            441'763'200ull * 1'000'000'000);
   // The 4 reserved bits above the milliseconds are not part of the time.
-  EXPECT_EQ(time_of_day_unix_ns(od::CanFrame(0x100, {0x95, 0x2C, 0xB3, 0xF2, 0x12, 0x39})), kNoonishUnixNs);
+  EXPECT_EQ(time_of_day_unix_ns(od::CanFrame(0x100, {0x95, 0x2C, 0xB3, 0xF2, 0x12, 0x39})),
+            kNoonishUnixNs);
 }
 
 TEST(NetworkTime, AFrameThatIsNoTimeOfDayIsRefused) {
-  EXPECT_FALSE(time_of_day_unix_ns(od::CanFrame(0x100, {0x95, 0x2C, 0xB3, 0x02, 0x12})));  // 5 bytes
+  EXPECT_FALSE(
+      time_of_day_unix_ns(od::CanFrame(0x100, {0x95, 0x2C, 0xB3, 0x02, 0x12})));  // 5 bytes
   // 86,400,000 ms = 0x05265C00 is the next midnight, not a time of this day.
   EXPECT_FALSE(time_of_day_unix_ns(od::CanFrame(0x100, {0x00, 0x5C, 0x26, 0x05, 0x12, 0x39})));
   NetworkTime t;
@@ -72,7 +75,8 @@ TEST(NetworkTime, TimestampsFollowTheLastTimeFrameByItsKernelArrival) {
   // A producer that stamps the next frame 1 s later (by its clock) 990 ms later (by ours):
   // the new offset applies from that frame on.
   d.bus.run_ms(985);
-  const od::CanFrame one_second_later(0x100, {0x7D, 0x30, 0xB3, 0x02, 0x12, 0x39});  // 45,297,789 ms
+  const od::CanFrame one_second_later(0x100,
+                                      {0x7D, 0x30, 0xB3, 0x02, 0x12, 0x39});  // 45,297,789 ms
   d.bus.send(one_second_later);
   d.bus.run_ms(2);
   EXPECT_EQ(d.status_time(), kNoonishUnixNs + 1'000'000'000 + 2'000'000);

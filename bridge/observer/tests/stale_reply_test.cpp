@@ -23,7 +23,8 @@ TEST(StaleReply, AnAnswerNamingAnotherObjectIsIgnoredAndTheTransferGoesOn) {
   EXPECT_FALSE(ev.collision);
   EXPECT_TRUE(out.empty()) << "no abort 0x06040043 sent";
   // Our own answer: 0x43 = expedited, 4 bytes, device type 0x00020192.
-  ev = ch.on_frame(od::CanFrame(0x585, {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00}), 3000, out);
+  ev =
+      ch.on_frame(od::CanFrame(0x585, {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x02, 0x00}), 3000, out);
   ASSERT_TRUE(ev.completed);
   EXPECT_TRUE(ch.result().ok());
   EXPECT_EQ(ch.result().data, (od::Bytes{0x92, 0x01, 0x02, 0x00}));
