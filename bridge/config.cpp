@@ -59,6 +59,13 @@ void load_sdo_channels(const config::TomlFile& file, BridgeConfig& cfg) {
   }
 }
 
+// "host" or "network": true for network time (README "TIME in the bridge's timestamps").
+bool timestamps(const std::string& value, const std::string& where) {
+  if (value == "host") return false;
+  if (value == "network") return true;
+  throw UsageError(where + ": timestamps \"" + value + "\": must be host or network");
+}
+
 // Applies the file's keys that the command line did not set.
 void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App& app) {
   const config::TomlFile file(path);
@@ -79,10 +86,14 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000, cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
   // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
   uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
+  uint_key("sdo_max_outstanding", nullptr, 1, 127, cfg.sdo_max_outstanding);
+  uint_key("sdo_rate_per_s", nullptr, 0, 100'000, cfg.sdo_rate_per_s);  // 0: as fast as answers come
+  if (auto v = file.string("timestamps"); v && !given("--timestamps")) cfg.network_time = timestamps(*v, file.path());
   if (file.has("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(file, cfg);
   cfg.dds_security = dds::load_security_table(file);
   file.refuse_unknown_keys({"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level", "tick_ms",
-                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels", "dds"});
+                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels", "dds", "sdo_max_outstanding",
+                            "sdo_rate_per_s", "timestamps"});
 }
 
 }  // namespace
@@ -115,6 +126,10 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
   app.add_option("--profiles", cfg.profiles, "Fast DDS XML profiles file (loaded before FASTRTPS_DEFAULT_PROFILES_FILE)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
   app.add_option("--tick-ms", cfg.tick_ms, "observer timer period in ms (1..1000, default 10)");
+  std::string timestamps_option;
+  app.add_option("--timestamps", timestamps_option,
+                 "host (default): samples carry the host's kernel timestamps; network: on the bus's TIME "
+                 "(COB-ID 0x100) once a TIME frame was seen");
   std::vector<std::string> sdo_channels;
   app.add_option("--sdo-channel", sdo_channels,
                  "NODE:RX,TX: read node NODE on its SDO server channel with these COB-IDs (client->server, "
@@ -129,6 +144,7 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
   } catch (const CLI::ParseError& e) {
     throw UsageError(e.what());
   }
+  if (!timestamps_option.empty()) cfg.network_time = timestamps(timestamps_option, "--timestamps");
   for (const std::string& text : sdo_channels) add_sdo_channel(cfg, parse_sdo_channel(text), "--sdo-channel " + text);
   if (!config_file.empty()) load_config_file(config_file, cfg, app);
   if (app.count("--ros2-prefix") && !cfg.ros2) throw UsageError("--ros2-prefix needs --ros2");

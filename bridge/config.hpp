@@ -24,6 +24,12 @@ struct BridgeConfig {
   // SDO server channels of the bridge's own, one per node (--sdo-channel NODE:RX,TX or the
   // [sdo_channels] table); other nodes are read on their default channel, when it is quiet.
   std::vector<NodeSdoChannel> sdo_channels;
+  // The bridge's SDO reads on the whole bus (issue 13): in flight at once, starts a second.
+  uint32_t sdo_max_outstanding = 8;
+  uint32_t sdo_rate_per_s = 1000;
+  // timestamps = "network": samples stamped on the bus's TIME (COB-ID 0x100) once one was
+  // seen; "host" (default): the host clock's kernel timestamps.
+  bool network_time = false;
   // [dds.security]: the DDS Security files (README "DDS Security"); only in the config file.
   dds::SecurityFiles dds_security;
 };

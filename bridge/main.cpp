@@ -1,8 +1,9 @@
 // stepbridge: watches a CAN bus (SocketCAN, kernel receive timestamps) and republishes
 // every node's axis status and position, node health and EMCYs on DDS topics.
 //
-// One thread: an epoll loop drains the socket on readable (every frame to the observer,
-// the SDO requests it answers with go out at once), and a timerfd tick drives the
+// One thread: an epoll loop reads the socket on readable, at most kFramesPerTurn frames a
+// wake-up (every frame to the observer, the SDO requests it answers with go out at once;
+// the rest is read on the next turn, after the timers), and a timerfd tick drives the
 // observer's timers. SIGINT/SIGTERM end the loop; then every known node's axes are
 // disposed, the writers get a moment to deliver, and the participant is deleted.
 #include <linux/can/error.h>
@@ -21,6 +22,7 @@
 #include "bridge/dds/publisher.hpp"
 #include "bridge/dds/security.hpp"
 #include "bridge/observer/bus_observer.hpp"
+#include "bridge/observer/receive_budget.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
@@ -57,6 +59,9 @@ int run(const bridge::BridgeConfig& cfg) {
   observer_config.heartbeat_timeout_ms = cfg.heartbeat_timeout_ms;
   observer_config.sdo_timeout_ms = cfg.sdo_timeout_ms;
   observer_config.sdo_channels = cfg.sdo_channels;
+  observer_config.sdo_max_outstanding = cfg.sdo_max_outstanding;
+  observer_config.sdo_rate_per_s = cfg.sdo_rate_per_s;
+  observer_config.network_time = cfg.network_time;
   bridge::BusObserver observer(publisher, observer_config);
 
   std::vector<od::CanFrame> out;
@@ -68,17 +73,19 @@ int run(const bridge::BridgeConfig& cfg) {
   canio::EventLoop loop;
   loop.stop_on_signals();
   loop.watch(can.fd(), [&] {
-    // Drain everything that is waiting: a burst of TPDOs is one wake-up.
-    while (auto r = can.receive()) {
-      bridge::ObservedFrame frame;
-      frame.frame = r->frame;
-      frame.can_time_ns = r->kernel_time_ns;
-      frame.error_frame = r->error_frame;
-      frame.error_class = r->error_class;
-      frame.controller_status = r->controller_status;
-      observer.on_frame(frame, canio::EventLoop::now_us(), out);
-      send_out();
-    }
+    // A burst of TPDOs is one wake-up, but a bounded one (bridge/observer/receive_budget.hpp):
+    // under a flood the timers and SIGTERM still get their turn.
+    bridge::handle_frames([&] { return can.receive(); },
+                          [&](const canio::ReceivedFrame& r) {
+                            bridge::ObservedFrame frame;
+                            frame.frame = r.frame;
+                            frame.can_time_ns = r.kernel_time_ns;
+                            frame.error_frame = r.error_frame;
+                            frame.error_class = r.error_class;
+                            frame.controller_status = r.controller_status;
+                            observer.on_frame(frame, canio::EventLoop::now_us(), out);
+                            send_out();
+                          });
     can.flush();
   });
   loop.every(uint64_t{cfg.tick_ms} * 1000, [&] {

@@ -11,9 +11,11 @@
 #include "bridge/observer/discovery_plan.hpp"
 #include "bridge/observer/emcy_decoder.hpp"
 #include "bridge/observer/heartbeat_monitor.hpp"
+#include "bridge/observer/network_time.hpp"
 #include "bridge/observer/retry_backoff.hpp"
 #include "bridge/observer/sdo_channel.hpp"
 #include "bridge/observer/tpdo_decoder.hpp"
+#include "bridge/observer/transfer_pacer.hpp"
 #include "node/profiles/cia402/objects.hpp"
 
 namespace stepnode::bridge {
@@ -48,6 +50,7 @@ struct Node {
   uint8_t error_code_reads = 0;
   bool refreshing = false;
   uint8_t refresh_axis = 0;
+  bool paced = false;  // its transfer in flight is counted by the pacer
 };
 
 bool sdo_allowed(NodeState s) {
@@ -59,7 +62,8 @@ bool sdo_allowed(NodeState s) {
 }  // namespace
 
 struct BusObserver::Impl {
-  Impl(SampleSink& s, ObserverConfig c) : sink(s), config(c), tpdo(s) {
+  Impl(SampleSink& s, ObserverConfig c)
+      : sink(s), config(c), tpdo(s), pacer(c.sdo_max_outstanding, c.sdo_rate_per_s) {
     // No clock and no global RNG in here; ASLR makes the address differ between two
     // bridge processes, which is all the jitter needs.
     random = c.random_seed ? c.random_seed
@@ -79,6 +83,9 @@ struct BusObserver::Impl {
   // CAN-ID -> node, for the SDO channels of the bridge's own (config.sdo_channels).
   std::array<uint8_t, 0x800> sdo_channel_node{};
   uint32_t random = 1;  // xorshift32 state for the collision jitter
+  TransferPacer pacer;  // the bridge's transfers on the whole bus (issue 13)
+  NetworkTime network_time;  // used with config.network_time
+  unsigned next_first = 1;  // the node the next round of starts begins with
 
   uint32_t next_random() {
     random ^= random << 13;
@@ -109,6 +116,14 @@ struct BusObserver::Impl {
   void refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
   void sdo_failed(Node& n, uint64_t now);
   void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
+  void pump_round(uint64_t now, std::vector<od::CanFrame>& out);
+  // The pacer counts a node's transfer from its start until whatever ended it (answer,
+  // abort, timeout, collision, cancel): checked after every call that can end one.
+  void settle(Node& n) {
+    if (!n.paced || !n.sdo.idle()) return;
+    n.paced = false;
+    pacer.ended();
+  }
   void lose(uint8_t id, Node& n, uint64_t now);
   void publish_health(Node& n, uint64_t now);
   NodeHealthSample health_now(const Node& n, uint64_t now) const;
@@ -120,6 +135,11 @@ BusObserver::~BusObserver() = default;
 
 const BusCounters& BusObserver::counters() const { return impl_->counters; }
 
+std::optional<int64_t> BusObserver::network_time_offset_ns() const {
+  if (!impl_->network_time.known()) return std::nullopt;
+  return impl_->network_time.offset_ns();
+}
+
 NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
   if (node == 0 || node >= kNodeIds || !impl_->nodes[node]) {
     NodeHealthSample s;
@@ -130,12 +150,21 @@ NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
   return impl_->health_now(*impl_->nodes[node], now_us);
 }
 
-void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector<od::CanFrame>& out) {
+void BusObserver::on_frame(const ObservedFrame& received, uint64_t now_us, std::vector<od::CanFrame>& out) {
   Impl& m = *impl_;
   ++m.counters.frames;
-  if (of.error_frame) return count_error_frame(m.counters, of.error_class, of.controller_status);
-  const od::CanFrame& f = of.frame;
+  if (received.error_frame)
+    return count_error_frame(m.counters, received.error_class, received.controller_status);
+  const od::CanFrame& f = received.frame;
   if (f.id > 0x7FF || f.dlc > 8) return m.bad(nullptr);
+  // The frame with its timestamp on the network's clock, when that is asked for and known.
+  ObservedFrame on_network_clock;
+  const bool remap = m.config.network_time && m.network_time.known();
+  if (remap) {
+    on_network_clock = received;
+    on_network_clock.can_time_ns = m.network_time.to_network(received.can_time_ns);
+  }
+  const ObservedFrame& of = remap ? on_network_clock : received;
 
   uint8_t tpdo_node = 0;
   if (!f.rtr) {
@@ -160,6 +189,11 @@ void BusObserver::on_frame(const ObservedFrame& of, uint64_t now_us, std::vector
     return;
   }
   if (uint8_t owner = m.sdo_channel_node[f.id]) return m.on_sdo(owner, of, now_us, out);
+  if (f.id == od::cob::kTimeStamp && m.config.network_time) {
+    // The stamp names the instant the frame was on the bus: its own kernel timestamp.
+    if (!m.network_time.on_time(f, received.can_time_ns)) m.bad(nullptr);
+    return;
+  }
   const auto id = static_cast<uint8_t>(f.id & 0x7F);
   const uint32_t function = f.id & 0x780;
   if (f.id == od::cob::kNmt) return;  // NMT commands: the heartbeats that follow tell the state
@@ -221,6 +255,7 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
   }
   if (f.id == od::cob::kSdoTx + id) ++n->health.frames;
   const SdoChannel::FrameEvent ev = n->sdo.on_frame(f, now, out);
+  settle(*n);
   if (ev.collision) {
     n->refreshing = false;  // the transfer was dropped; a refresh read is made again
     sdo_failed(*n, now);
@@ -241,10 +276,14 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
   }
   if (ev.completed) read_done(id, *n, now, of.can_time_ns, out);
   else pump(*n, now, out);
+  // A transfer ended and this node did not take its place (finished, or waiting): the
+  // next node waiting for a start gets it now rather than at the next tick.
+  if (n->sdo.idle() && pacer.may_start(now)) pump_round(now, out);
 }
 
 void BusObserver::Impl::begin_discovery(Node& n) {
   n.sdo.cancel();
+  settle(n);
   n.error_code_reads = 0;  // the snapshot reads them
   n.refreshing = false;
   n.plan.restart_all();
@@ -309,22 +348,38 @@ void BusObserver::Impl::refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t
 }
 
 void BusObserver::Impl::pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
+  settle(n);
   if (!sdo_allowed(n.heartbeat.state())) return;
   const bool refresh = n.plan.finished() && n.error_code_reads != 0 && !n.refreshing;
   if (n.plan.finished() && !refresh) return;
-  if (!n.backoff.ready(now) || !n.sdo.can_start(now)) return;
+  if (!n.backoff.ready(now) || !n.sdo.can_start(now) || !pacer.may_start(now)) return;
   if (refresh) {
     n.refresh_axis = static_cast<uint8_t>(__builtin_ctz(n.error_code_reads));
     n.refreshing = true;
     n.sdo.start_upload(cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, now, out);
-    return;
+  } else {
+    const SdoRead r = n.plan.next();
+    n.sdo.start_upload(r.index, r.sub, now, out);
   }
-  const SdoRead r = n.plan.next();
-  n.sdo.start_upload(r.index, r.sub, now, out);
+  if (n.sdo.idle()) return;
+  n.paced = true;
+  pacer.started(now);
+}
+
+// One chance to start for every node, beginning one further each round so that no node
+// is always last when starts are scarce.
+void BusObserver::Impl::pump_round(uint64_t now, std::vector<od::CanFrame>& out) {
+  const unsigned first = next_first;
+  next_first = next_first % (kNodeIds - 1) + 1;
+  for (unsigned k = 0; k < kNodeIds - 1 && pacer.may_start(now); ++k) {
+    const unsigned id = (first - 1 + k) % (kNodeIds - 1) + 1;
+    if (Node* n = nodes[id].get()) pump(*n, now, out);
+  }
 }
 
 void BusObserver::Impl::lose(uint8_t id, Node& n, uint64_t now) {
   n.sdo.cancel();
+  settle(n);
   n.error_code_reads = 0;
   n.refreshing = false;
   tpdo.forget(id);
@@ -361,16 +416,20 @@ void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/, std::vector
     Node* n = m.nodes[id].get();
     if (!n) continue;
     const auto node = static_cast<uint8_t>(id);
-    if (n->sdo.on_tick(now_us, out)) m.read_done(node, *n, now_us, 0, out);
+    if (n->sdo.on_tick(now_us, out)) {
+      m.settle(*n);
+      m.read_done(node, *n, now_us, 0, out);
+    }
     const NodeInfo& info = n->plan.info();
     if (n->heartbeat.check_lost(now_us, m.config.heartbeat_timeout_ms, info.heartbeat_period_ms,
                                 info.heartbeat_period_read)) {
       m.lose(node, *n, now_us);
       continue;
     }
-    m.pump(*n, now_us, out);
     if (now_us - n->last_health_us >= health_period_us) m.publish_health(*n, now_us);
   }
+  // After every timeout of this tick has freed its place.
+  m.pump_round(now_us, out);
 }
 
 void BusObserver::dispose_all() {

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "bridge/samples.hpp"
@@ -38,6 +39,17 @@ struct ObserverConfig {
   // master's (a second bridge reading the same object), and must count as traffic.
   bool own_frames_echoed = false;
   std::vector<NodeSdoChannel> sdo_channels;  // nodes not named here: the default channel
+  // The bridge's SDO reads on the whole bus (issue 13, bridge/observer/transfer_pacer.hpp):
+  // at most this many transfers in flight at once, over all nodes ...
+  uint32_t sdo_max_outstanding = 8;
+  // ... and at most this many transfer starts per second on average; 0: no rate bound,
+  // as fast as the answers come (stepbridge's default is 1000, bridge/config.hpp).
+  uint32_t sdo_rate_per_s = 0;
+  // Timestamps on the network's clock (bridge/observer/network_time.hpp): once a TIME
+  // frame (COB-ID 0x100) was seen, every frame's kernel timestamp is mapped by the offset
+  // between the last TIME stamp and that frame's own kernel arrival, so the samples'
+  // can_time_ns are network time. Before a TIME frame, and when off: the host clock.
+  bool network_time = false;
 };
 
 // A frame as the socket delivered it.
@@ -67,6 +79,8 @@ class BusObserver {
 
   // Read-only views (tests, logs, the DDS side's statistics).
   const BusCounters& counters() const;
+  // Network time minus host time (ns), once a TIME frame was seen with network_time on.
+  std::optional<int64_t> network_time_offset_ns() const;
   // The node's health as it would be published now; state Unknown for a node never seen.
   NodeHealthSample node_health(uint8_t node, uint64_t now_us) const;
 

@@ -1,0 +1,60 @@
+// stepbridge's keys of issues 13 and 12: the SDO pacing and the timestamps' clock.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bridge/config.hpp"
+
+namespace stepnode::bridge {
+namespace {
+
+BridgeConfig parse_args(std::vector<std::string> args) {
+  args.insert(args.begin(), "stepbridge");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  bool exit_now = false;
+  int exit_code = 0;
+  return parse_bridge_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
+}
+
+std::string config_file(const std::string& text) {
+  auto path = std::filesystem::temp_directory_path() /
+              ("bridge-scale-" + std::to_string(getpid()) + ".toml");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(BridgeScaleConfig, DefaultsPaceAndStampOnTheHostClock) {
+  const BridgeConfig cfg = parse_args({"--iface", "vcan0"});
+  EXPECT_EQ(cfg.sdo_max_outstanding, 8u);
+  EXPECT_EQ(cfg.sdo_rate_per_s, 1000u);
+  EXPECT_FALSE(cfg.network_time);
+}
+
+TEST(BridgeScaleConfig, FileKeysAndTheOption) {
+  const std::string file = config_file(
+      "iface = \"vcan0\"\nsdo_max_outstanding = 4\nsdo_rate_per_s = 250\ntimestamps = "
+      "\"network\"\n");
+  BridgeConfig cfg = parse_args({"--config", file});
+  EXPECT_EQ(cfg.sdo_max_outstanding, 4u);
+  EXPECT_EQ(cfg.sdo_rate_per_s, 250u);
+  EXPECT_TRUE(cfg.network_time);
+  cfg = parse_args({"--config", file, "--timestamps", "host"});
+  EXPECT_FALSE(cfg.network_time) << "the command line wins";
+  EXPECT_TRUE(parse_args({"--iface", "vcan0", "--timestamps", "network"}).network_time);
+  std::filesystem::remove(file);
+}
+
+TEST(BridgeScaleConfig, BadValuesAreOneLine) {
+  EXPECT_THROW(parse_args({"--iface", "vcan0", "--timestamps", "gps"}), UsageError);
+  const std::string file = config_file("iface = \"vcan0\"\nsdo_max_outstanding = 0\n");
+  EXPECT_THROW(parse_args({"--config", file}), UsageError);
+  std::filesystem::remove(file);
+}
+
+}  // namespace
+}  // namespace stepnode::bridge
