@@ -15,13 +15,19 @@ namespace {
 constexpr uint32_t kMaxDomain = 232;
 
 void check(const BridgeConfig& cfg) {
-  if (cfg.iface.empty()) throw UsageError("no CAN interface: give --iface IFACE (or iface in the config file)");
-  if (cfg.domain > kMaxDomain) throw UsageError("domain " + std::to_string(cfg.domain) + ": must be 0..232");
-  if (cfg.tick_ms < 1 || cfg.tick_ms > 1000) throw UsageError("tick_ms " + std::to_string(cfg.tick_ms) + ": must be 1..1000");
-  static const char* levels[] = {"trace", "debug", "info", "warn", "warning", "error", "critical", "off"};
+  if (cfg.iface.empty())
+    throw UsageError("no CAN interface: give --iface IFACE (or iface in the config file)");
+  if (cfg.domain > kMaxDomain)
+    throw UsageError("domain " + std::to_string(cfg.domain) + ": must be 0..232");
+  if (cfg.tick_ms < 1 || cfg.tick_ms > 1000)
+    throw UsageError("tick_ms " + std::to_string(cfg.tick_ms) + ": must be 1..1000");
+  static const char* levels[] = {"trace",   "debug", "info",     "warn",
+                                 "warning", "error", "critical", "off"};
   bool level_ok = false;
   for (const char* l : levels) level_ok |= cfg.log_level == l;
-  if (!level_ok) throw UsageError("log level \"" + cfg.log_level + "\": must be trace, debug, info, warn, error, critical or off");
+  if (!level_ok)
+    throw UsageError("log level \"" + cfg.log_level +
+                     "\": must be trace, debug, info, warn, error, critical or off");
 }
 
 uint32_t parse_cob_id(const std::string& text, const std::string& what) {
@@ -31,9 +37,11 @@ uint32_t parse_cob_id(const std::string& text, const std::string& what) {
 
 void add_sdo_channel(BridgeConfig& cfg, const NodeSdoChannel& ch, const std::string& what) {
   if (ch.node < 1 || ch.node > 127) throw UsageError(what + ": node must be 1..127");
-  if (ch.client_to_server == ch.server_to_client) throw UsageError(what + ": the two COB-IDs must differ");
+  if (ch.client_to_server == ch.server_to_client)
+    throw UsageError(what + ": the two COB-IDs must differ");
   for (const NodeSdoChannel& other : cfg.sdo_channels)
-    if (other.node == ch.node) throw UsageError(what + ": node " + std::to_string(ch.node) + " has a channel already");
+    if (other.node == ch.node)
+      throw UsageError(what + ": node " + std::to_string(ch.node) + " has a channel already");
   cfg.sdo_channels.push_back(ch);
 }
 
@@ -47,10 +55,12 @@ void load_sdo_channels(const config::TomlFile& file, BridgeConfig& cfg) {
     if (!ids || ids->size() != 2 || !ids->at(0).is_integer() || !ids->at(1).is_integer())
       throw UsageError(what + ": must be [CLIENT_TO_SERVER, SERVER_TO_CLIENT]");
     NodeSdoChannel ch;
-    ch.node = static_cast<uint8_t>(std::clamp<int64_t>(std::atoll(std::string(key.str()).c_str()), 0, 255));
+    ch.node = static_cast<uint8_t>(
+        std::clamp<int64_t>(std::atoll(std::string(key.str()).c_str()), 0, 255));
     auto cob_id = [&](const toml::node& n) {
       const int64_t v = *n.value<int64_t>();
-      if (v < 1 || v > 0x7FF) throw UsageError(what + ": COB-IDs must be 11-bit CAN-IDs (1..0x7FF)");
+      if (v < 1 || v > 0x7FF)
+        throw UsageError(what + ": COB-IDs must be 11-bit CAN-IDs (1..0x7FF)");
       return static_cast<uint32_t>(v);
     };
     ch.client_to_server = cob_id(ids->at(0));
@@ -73,7 +83,8 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   auto string_key = [&](const char* key, const char* option, std::string& into) {
     if (auto v = file.string(key); v && !given(option)) into = *v;
   };
-  auto uint_key = [&](const char* key, const char* option, int64_t min, int64_t max, uint32_t& into) {
+  auto uint_key = [&](const char* key, const char* option, int64_t min, int64_t max,
+                      uint32_t& into) {
     if (auto v = file.integer(key, min, max); v && !given(option)) into = static_cast<uint32_t>(*v);
   };
   string_key("iface", "--iface", cfg.iface);
@@ -83,17 +94,20 @@ void load_config_file(const std::string& path, BridgeConfig& cfg, const CLI::App
   string_key("profiles", "--profiles", cfg.profiles);
   string_key("log_level", "--log-level", cfg.log_level);
   uint_key("tick_ms", "--tick-ms", 1, 1000, cfg.tick_ms);
-  uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000, cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
+  uint_key("heartbeat_timeout_ms", nullptr, 0, 3'600'000,
+           cfg.heartbeat_timeout_ms);  // 0: from the heartbeats
   // An SDO answer takes at least a frame time or two: below 10 ms every read would fail.
   uint_key("sdo_timeout_ms", nullptr, 10, 60'000, cfg.sdo_timeout_ms);
   uint_key("sdo_max_outstanding", nullptr, 1, 127, cfg.sdo_max_outstanding);
-  uint_key("sdo_rate_per_s", nullptr, 0, 100'000, cfg.sdo_rate_per_s);  // 0: as fast as answers come
-  if (auto v = file.string("timestamps"); v && !given("--timestamps")) cfg.network_time = timestamps(*v, file.path());
+  uint_key("sdo_rate_per_s", nullptr, 0, 100'000,
+           cfg.sdo_rate_per_s);  // 0: as fast as answers come
+  if (auto v = file.string("timestamps"); v && !given("--timestamps"))
+    cfg.network_time = timestamps(*v, file.path());
   if (file.has("sdo_channels") && !given("--sdo-channel")) load_sdo_channels(file, cfg);
   cfg.dds_security = dds::load_security_table(file);
-  file.refuse_unknown_keys({"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level", "tick_ms",
-                            "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels", "dds", "sdo_max_outstanding",
-                            "sdo_rate_per_s", "timestamps"});
+  file.refuse_unknown_keys({"iface", "domain", "ros2", "ros2_prefix", "profiles", "log_level",
+                            "tick_ms", "heartbeat_timeout_ms", "sdo_timeout_ms", "sdo_channels",
+                            "dds", "sdo_max_outstanding", "sdo_rate_per_s", "timestamps"});
 }
 
 }  // namespace
@@ -116,25 +130,32 @@ NodeSdoChannel parse_sdo_channel(const std::string& text) {
 BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
   BridgeConfig cfg;
   exit_now = false;
-  CLI::App app{"stepbridge: republishes a CANopen bus's stepnode axes and node health on DDS (eProsima Fast DDS)"};
+  CLI::App app{
+      "stepbridge: republishes a CANopen bus's stepnode axes and node health on DDS (eProsima Fast "
+      "DDS)"};
   std::string config_file;
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
   app.add_option("--domain", cfg.domain, "DDS domain id 0..232 (default 0)");
   app.add_option("--config", config_file, "TOML config file with the same keys as the options");
-  app.add_flag("--ros2", cfg.ros2, "ROS 2 names: topics rt/<prefix>/axis_status ..., types stepnode::msg::dds_::AxisStatus_ ...");
+  app.add_flag("--ros2", cfg.ros2,
+               "ROS 2 names: topics rt/<prefix>/axis_status ..., types "
+               "stepnode::msg::dds_::AxisStatus_ ...");
   app.add_option("--ros2-prefix", cfg.ros2_prefix, "topic prefix in ROS 2 mode (default stepnode)");
-  app.add_option("--profiles", cfg.profiles, "Fast DDS XML profiles file (loaded before FASTRTPS_DEFAULT_PROFILES_FILE)");
+  app.add_option("--profiles", cfg.profiles,
+                 "Fast DDS XML profiles file (loaded before FASTRTPS_DEFAULT_PROFILES_FILE)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
   app.add_option("--tick-ms", cfg.tick_ms, "observer timer period in ms (1..1000, default 10)");
   std::string timestamps_option;
-  app.add_option("--timestamps", timestamps_option,
-                 "host (default): samples carry the host's kernel timestamps; network: on the bus's TIME "
-                 "(COB-ID 0x100) once a TIME frame was seen");
+  app.add_option(
+      "--timestamps", timestamps_option,
+      "host (default): samples carry the host's kernel timestamps; network: on the bus's TIME "
+      "(COB-ID 0x100) once a TIME frame was seen");
   std::vector<std::string> sdo_channels;
-  app.add_option("--sdo-channel", sdo_channels,
-                 "NODE:RX,TX: read node NODE on its SDO server channel with these COB-IDs (client->server, "
-                 "server->client, as set in 0x1201..0x1203 sub 1/2); repeatable. Other nodes: the default "
-                 "channel, when quiet");
+  app.add_option(
+      "--sdo-channel", sdo_channels,
+      "NODE:RX,TX: read node NODE on its SDO server channel with these COB-IDs (client->server, "
+      "server->client, as set in 0x1201..0x1203 sub 1/2); repeatable. Other nodes: the default "
+      "channel, when quiet");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -145,7 +166,8 @@ BridgeConfig parse_bridge_command_line(int argc, char** argv, bool& exit_now, in
     throw UsageError(e.what());
   }
   if (!timestamps_option.empty()) cfg.network_time = timestamps(timestamps_option, "--timestamps");
-  for (const std::string& text : sdo_channels) add_sdo_channel(cfg, parse_sdo_channel(text), "--sdo-channel " + text);
+  for (const std::string& text : sdo_channels)
+    add_sdo_channel(cfg, parse_sdo_channel(text), "--sdo-channel " + text);
   if (!config_file.empty()) load_config_file(config_file, cfg, app);
   if (app.count("--ros2-prefix") && !cfg.ros2) throw UsageError("--ros2-prefix needs --ros2");
   if (!cfg.profiles.empty() && !std::filesystem::is_regular_file(cfg.profiles))

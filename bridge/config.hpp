@@ -16,9 +16,9 @@ struct BridgeConfig {
   uint32_t domain = 0;
   bool ros2 = false;
   std::string ros2_prefix = "stepnode";
-  std::string profiles;         // Fast DDS XML profiles file
+  std::string profiles;  // Fast DDS XML profiles file
   std::string log_level = "info";
-  uint32_t tick_ms = 10;        // observer timers (SDO timeouts, heartbeat loss, health)
+  uint32_t tick_ms = 10;              // observer timers (SDO timeouts, heartbeat loss, health)
   uint32_t heartbeat_timeout_ms = 0;  // 0: 3 x the node's heartbeat interval, min 1000
   uint32_t sdo_timeout_ms = 500;
   // SDO server channels of the bridge's own, one per node (--sdo-channel NODE:RX,TX or the

@@ -98,9 +98,11 @@ int run(const bridge::BridgeConfig& cfg) {
   // socket exist by now, so the bridge serves; the watchdog is a timer of this loop, so a
   // hung loop stops petting.
   canio::ServiceNotifier notifier;
-  if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
+  if (uint64_t period = notifier.watchdog_period_us())
+    loop.every(period, [&] { notifier.watchdog(); });
 
-  spdlog::info("stepbridge on {}, DDS domain {}{}{}", cfg.iface, cfg.domain, cfg.ros2 ? ", ROS 2 naming" : "",
+  spdlog::info("stepbridge on {}, DDS domain {}{}{}", cfg.iface, cfg.domain,
+               cfg.ros2 ? ", ROS 2 naming" : "",
                cfg.dds_security.enabled() ? ", DDS Security" : "");
   notifier.status("bridging " + cfg.iface + " to DDS domain " + std::to_string(cfg.domain));
   notifier.ready();
@@ -110,7 +112,8 @@ int run(const bridge::BridgeConfig& cfg) {
   notifier.stopping();
   observer.dispose_all();
   publisher.wait_acknowledged(500);
-  spdlog::info("{} samples written, {} write failures", publisher.written(), publisher.write_failures());
+  spdlog::info("{} samples written, {} write failures", publisher.written(),
+               publisher.write_failures());
   return 0;  // ~DdsPublisher deletes the participant
 }
 

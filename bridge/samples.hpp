@@ -28,8 +28,8 @@ struct AxisStatusSample {
   uint8_t axis = 0;
   uint16_t status_bits = 0;  // %I1..%I16 as bits 0..15 (node/motion/axis_registers.hpp)
   int8_t done_code = kDoneUnknown;
-  uint8_t hp_error = 0;        // HP error number 89..94, 0 = none (when mapped)
-  uint64_t can_time_ns = 0;    // kernel receive timestamp (CLOCK_REALTIME) of the TPDO
+  uint8_t hp_error = 0;      // HP error number 89..94, 0 = none (when mapped)
+  uint64_t can_time_ns = 0;  // kernel receive timestamp (CLOCK_REALTIME) of the TPDO
 };
 
 struct AxisPositionSample {
@@ -97,7 +97,9 @@ struct DriveStatusSample {
   uint16_t error_code = 0;        // 603Fh
   uint64_t can_time_ns = 0;       // kernel receive timestamp of the TPDO (or of the SDO answer)
   uint64_t publish_time_ns = 0;   // CLOCK_REALTIME when the bridge published
-  DriveState state() const { return statusword_known ? drive_state_of(statusword) : DriveState::Unknown; }
+  DriveState state() const {
+    return statusword_known ? drive_state_of(statusword) : DriveState::Unknown;
+  }
 };
 
 struct BusCounters {
@@ -124,19 +126,19 @@ struct EmergencySample {
 struct NodeHealthSample {
   uint8_t node = 0;
   NodeState state = NodeState::Unknown;
-  bool is_stepnode = false;     // identity says stepnode (0x1018 product code 0x53544550)
-  std::string device_name;      // 0x1008 (empty until read or when unreadable)
+  bool is_stepnode = false;  // identity says stepnode (0x1018 product code 0x53544550)
+  std::string device_name;   // 0x1008 (empty until read or when unreadable)
   uint32_t vendor_id = 0, product_code = 0, revision = 0, serial = 0;  // 0x1018
-  uint8_t axes = 0;             // the device's axes: Horner blocks (0x2n01) or CiA 402 axes
-                                // (67FFh + 0x800 * a), whichever are more
+  uint8_t axes = 0;               // the device's axes: Horner blocks (0x2n01) or CiA 402 axes
+                                  // (67FFh + 0x800 * a), whichever are more
   uint32_t heartbeat_age_ms = 0;  // since the last heartbeat
   uint16_t last_emcy_code = 0;
-  uint8_t error_register = 0;   // from the last EMCY
-  uint32_t frames = 0;          // frames from this node
+  uint8_t error_register = 0;  // from the last EMCY
+  uint32_t frames = 0;         // frames from this node
   uint32_t bad_frames = 0;
-  uint32_t sdo_failures = 0;    // discovery transfers that failed (each is retried)
-  bool discovered = false;      // identity and mapping read
-  BusCounters bus;              // the whole bus, as the bridge's socket sees it
+  uint32_t sdo_failures = 0;  // discovery transfers that failed (each is retried)
+  bool discovered = false;    // identity and mapping read
+  BusCounters bus;            // the whole bus, as the bridge's socket sees it
 };
 
 // The observer's output. Implemented by the DDS publisher and by test recorders.

@@ -9,7 +9,7 @@
 namespace stepnode::canio {
 
 struct LinkInfo {
-  std::string kind;                 // IFLA_INFO_KIND; empty when the kernel gave none
+  std::string kind;                  // IFLA_INFO_KIND; empty when the kernel gave none
   std::optional<uint32_t> bit_rate;  // bit/s (IFLA_CAN_BITTIMING), for a CAN controller
 };
 

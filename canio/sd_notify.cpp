@@ -43,14 +43,18 @@ ServiceNotifier::ServiceNotifier(const Settings& settings) {
   // A path needs room for its terminating NUL; an abstract name ('@' becomes NUL) is
   // exactly its bytes, and its length is part of the name.
   bool abstract = name[0] == '@';
-  if ((name[0] != '/' && !abstract) || name.size() + (abstract ? 0 : 1) > sizeof address_.sun_path) {
-    spdlog::warn("NOTIFY_SOCKET '{}' is not an absolute path or an @abstract name that fits: not notifying", name);
+  if ((name[0] != '/' && !abstract) ||
+      name.size() + (abstract ? 0 : 1) > sizeof address_.sun_path) {
+    spdlog::warn(
+        "NOTIFY_SOCKET '{}' is not an absolute path or an @abstract name that fits: not notifying",
+        name);
     return;
   }
   address_.sun_family = AF_UNIX;
   std::memcpy(address_.sun_path, name.data(), name.size());
   if (abstract) address_.sun_path[0] = '\0';
-  address_length_ = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + name.size() + (abstract ? 0 : 1));
+  address_length_ =
+      static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + name.size() + (abstract ? 0 : 1));
   fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd_ < 0) {
     spdlog::warn("NOTIFY_SOCKET: socket: {}: not notifying", std::strerror(errno));
@@ -76,7 +80,8 @@ bool ServiceNotifier::send(std::string_view message) {
   if (n == static_cast<ssize_t>(message.size())) return true;
   // Logged at debug only: a watchdog message that cannot go out every few seconds would
   // otherwise fill the journal, and the manager notices the silence by itself.
-  spdlog::debug("NOTIFY_SOCKET: sending '{}': {}", message, n < 0 ? std::strerror(errno) : "short write");
+  spdlog::debug("NOTIFY_SOCKET: sending '{}': {}", message,
+                n < 0 ? std::strerror(errno) : "short write");
   return false;
 }
 

@@ -3,8 +3,8 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
-#include <net/if_arp.h>
 #include <net/if.h>
+#include <net/if_arp.h>
 #include <spdlog/spdlog.h>
 #include <sys/ioctl.h>
 #include <sys/socket.h>
@@ -87,9 +87,11 @@ void SocketCan::set_filters(const std::vector<Filter>& filters) {
   // the mask: data frames only. An exact 11-bit data-frame filter (mask 0x7FF with both
   // flags) is the kernel's fast case, a table lookup by identifier.
   for (const Filter& x : filters)
-    f.push_back({x.id & CAN_SFF_MASK, (x.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | (x.remote_too ? 0 : CAN_RTR_FLAG)});
+    f.push_back({x.id & CAN_SFF_MASK,
+                 (x.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | (x.remote_too ? 0 : CAN_RTR_FLAG)});
   if (f.empty()) f.push_back({0, 0});  // everything
-  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.data(), static_cast<socklen_t>(f.size() * sizeof(can_filter))) != 0)
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.data(),
+                   static_cast<socklen_t>(f.size() * sizeof(can_filter))) != 0)
     fail(iface_, "setsockopt CAN_RAW_FILTER");
 }
 
@@ -120,7 +122,8 @@ std::optional<ReceivedFrame> SocketCan::receive() {
     if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMPNS) {
       timespec ts;
       std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-      r.kernel_time_ns = static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
+      r.kernel_time_ns =
+          static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
     } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
       std::memcpy(&rx_overruns_, CMSG_DATA(c), sizeof rx_overruns_);
     }

@@ -16,7 +16,7 @@ struct ReceivedFrame {
   od::CanFrame frame;
   uint64_t kernel_time_ns = 0;  // CLOCK_REALTIME receive timestamp from the kernel
   bool error_frame = false;
-  uint32_t error_class = 0;      // CAN_ERR_* bits of an error frame
+  uint32_t error_class = 0;       // CAN_ERR_* bits of an error frame
   uint8_t controller_status = 0;  // data[1] of a CAN_ERR_CRTL error frame
   uint8_t protocol_status = 0;
 };

@@ -26,7 +26,8 @@ std::string one_line(std::string_view text) {
 
 TomlFile::TomlFile(std::string path) : path_(std::move(path)) {
   // A directory or a missing file: toml++ would say something less clear.
-  if (!std::filesystem::is_regular_file(path_)) throw UsageError("config " + path_ + ": cannot read file");
+  if (!std::filesystem::is_regular_file(path_))
+    throw UsageError("config " + path_ + ": cannot read file");
   try {
     table_ = toml::parse_file(path_);
   } catch (const toml::parse_error& e) {
@@ -66,7 +67,8 @@ std::optional<int64_t> TomlFile::integer(std::string_view key, int64_t min, int6
 
 void TomlFile::refuse_unknown_keys(std::initializer_list<std::string_view> known) const {
   for (const auto& [key, value] : table_)
-    if (std::find(known.begin(), known.end(), key.str()) == known.end()) refuse(key.str(), "unknown key");
+    if (std::find(known.begin(), known.end(), key.str()) == known.end())
+      refuse(key.str(), "unknown key");
 }
 
 }  // namespace stepnode::config

@@ -48,7 +48,8 @@ od::CanFrame any_frame(fuzz::ByteStream& in) {
 
 void send_tpdo(bridge::test::TestBus& bus, FakeNode& node, uint8_t k, uint32_t value) {
   od::Dictionary& d = node.dictionary();
-  if (!d.object(static_cast<uint16_t>(0x1800 + k)) || !d.object(static_cast<uint16_t>(0x1A00 + k))) return;
+  if (!d.object(static_cast<uint16_t>(0x1800 + k)) || !d.object(static_cast<uint16_t>(0x1A00 + k)))
+    return;
   // The values the TPDO may carry: an axis' status and positions, or a drive's statusword.
   const unsigned axis = k / 4;
   if (d.find(horner::obj::index(axis, horner::obj::kStatusBits), 0))

@@ -24,7 +24,8 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string dir = fuzz::fresh_state_dir().string();
   const std::string file = dir + "/config.toml";
-  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
   std::string args[] = {"stepnode", "--config", file, "--iface", "fuzz0", "--state-dir", dir};
   char* argv[std::size(args)];
   for (size_t i = 0; i < std::size(args); ++i) argv[i] = args[i].data();

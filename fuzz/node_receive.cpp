@@ -30,10 +30,14 @@ constexpr int kMaxEvents = 2000;
 
 uint32_t table_id(unsigned k) {
   static constexpr uint32_t kTable[16] = {
-      0x000,        0x080,        0x100,         0x200 + kId,  // NMT, SYNC, TIME, RPDO1
-      0x300 + kId,  0x400 + kId,  0x500 + kId,   0x600 + kId,  // RPDO2..4, SDO request
-      0x701,        0x77F,        0x081,         0x7E5,        // heartbeats (master, other), EMCY, LSS
-      0x181,        0x585,        0x700 + kId,   0x080,        // another's TPDO, our SDO id, our heartbeat id, SYNC
+      0x000,       0x080,
+      0x100,       0x200 + kId,  // NMT, SYNC, TIME, RPDO1
+      0x300 + kId, 0x400 + kId,
+      0x500 + kId, 0x600 + kId,  // RPDO2..4, SDO request
+      0x701,       0x77F,
+      0x081,       0x7E5,  // heartbeats (master, other), EMCY, LSS
+      0x181,       0x585,
+      0x700 + kId, 0x080,  // another's TPDO, our SDO id, our heartbeat id, SYNC
   };
   return kTable[k & 15];
 }
@@ -64,7 +68,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   n.start_operational();
   const uint64_t start = n.now_us;
   uint32_t overruns = 0;
-  for (int events = 0; !in.done() && events < kMaxEvents && n.now_us - start < kMaxVirtualUs; ++events) {
+  for (int events = 0; !in.done() && events < kMaxEvents && n.now_us - start < kMaxVirtualUs;
+       ++events) {
     const uint8_t op = in.u8();
     n.sent.clear();
     switch (op >> 4) {

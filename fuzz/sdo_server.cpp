@@ -48,9 +48,9 @@ std::vector<od::Bytes> snapshot(od::Dictionary& d) {
 bool confirms_download_end(const od::CanFrame& request, const std::vector<od::CanFrame>& out) {
   if (out.empty() || out.front().dlc != 8) return false;
   const uint8_t q = request.data[0], r = out.front().data[0];
-  if (r == 0x60 && (q >> 5) == 1 && (q & 0x02)) return true;             // expedited download
-  if ((r & 0xEF) == 0x20 && (q >> 5) == 0 && (q & 0x01)) return true;    // last segment
-  return r == 0xA1;                                                       // block download end
+  if (r == 0x60 && (q >> 5) == 1 && (q & 0x02)) return true;           // expedited download
+  if ((r & 0xEF) == 0x20 && (q >> 5) == 0 && (q & 0x01)) return true;  // last segment
+  return r == 0xA1;                                                    // block download end
 }
 
 // Reading 0x1010/0x1011 refreshes their value (on_read): a change an upload may make.
@@ -60,7 +60,8 @@ bool is_upload_response(const std::vector<od::CanFrame>& out) {
   return scs == 2 || scs == 0 || scs == 6;
 }
 
-[[noreturn]] void fail(const char* what, const od::CanFrame& request, const std::vector<od::CanFrame>& out) {
+[[noreturn]] void fail(const char* what, const od::CanFrame& request,
+                       const std::vector<od::CanFrame>& out) {
   std::fprintf(stderr, "sdo_server oracle: %s\nrequest dlc %u:", what, request.dlc);
   for (unsigned i = 0; i < request.dlc; ++i) std::fprintf(stderr, " %02X", request.data[i]);
   for (const od::CanFrame& f : out) {
@@ -71,8 +72,8 @@ bool is_upload_response(const std::vector<od::CanFrame>& out) {
   std::abort();
 }
 
-void check_changes(od::Dictionary& d, const std::vector<od::Bytes>& before, const od::CanFrame* request,
-                   const std::vector<od::CanFrame>& out) {
+void check_changes(od::Dictionary& d, const std::vector<od::Bytes>& before,
+                   const od::CanFrame* request, const std::vector<od::CanFrame>& out) {
   size_t i = 0;
   for (const auto& [index, object] : d.objects())
     for (const auto& [sub, e] : object.entries) {
@@ -80,7 +81,8 @@ void check_changes(od::Dictionary& d, const std::vector<od::Bytes>& before, cons
         if (request && e.on_read && is_upload_response(out)) continue;
         std::fprintf(stderr, "changed: %04X:%02X\n", index, sub);
         if (!request) fail("a value changed on the server's tick (timeout)", od::CanFrame{}, out);
-        if (!confirms_download_end(*request, out)) fail("a value changed without a download confirmation", *request, out);
+        if (!confirms_download_end(*request, out))
+          fail("a value changed without a download confirmation", *request, out);
       }
     }
 }

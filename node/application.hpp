@@ -33,7 +33,8 @@ class Application {
   virtual void state_changed(NmtState /*state*/, uint64_t /*now_us*/) {}
   // A communication error, before 0x1029's change of NMT state. `node`: the monitored node
   // whose heartbeat was lost (0 for a bus-off and for life guarding: the guarding master).
-  virtual void communication_error(CommunicationError /*error*/, uint8_t /*node*/, uint64_t /*now_us*/) {}
+  virtual void communication_error(CommunicationError /*error*/, uint8_t /*node*/,
+                                   uint64_t /*now_us*/) {}
   // The heartbeat of monitored node `node` is back (or it is no longer watched).
   virtual void heartbeat_recovered(uint8_t /*node*/, uint64_t /*now_us*/) {}
   // The guarding master's requests are back after a life guarding event.

@@ -23,7 +23,8 @@ bool write_all(int fd, const std::string& data) {
 
 }  // namespace
 
-bool write_file_atomically(const std::filesystem::path& file, const std::string& contents, std::string& error) {
+bool write_file_atomically(const std::filesystem::path& file, const std::string& contents,
+                           std::string& error) {
   std::error_code ec;
   std::filesystem::create_directories(file.parent_path(), ec);
   std::filesystem::path tmp = file;
@@ -40,7 +41,8 @@ bool write_file_atomically(const std::filesystem::path& file, const std::string&
     ::unlink(tmp.c_str());
     return false;
   }
-  int dir = ::open(file.parent_path().empty() ? "." : file.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  int dir = ::open(file.parent_path().empty() ? "." : file.parent_path().c_str(),
+                   O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) {
     ::fsync(dir);
     ::close(dir);

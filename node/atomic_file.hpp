@@ -10,6 +10,7 @@ namespace stepnode::node {
 
 // Creates the directory if needed. False (with `error` set to the reason, naming the file)
 // when the file cannot be written; the old file is then untouched.
-bool write_file_atomically(const std::filesystem::path& file, const std::string& contents, std::string& error);
+bool write_file_atomically(const std::filesystem::path& file, const std::string& contents,
+                           std::string& error);
 
 }  // namespace stepnode::node

@@ -7,12 +7,14 @@ namespace stepnode::node {
 AxisBank::AxisBank(const DeviceLayout& layout) {
   machine_.axes.resize(layout.motors());
   // The step port's horizon, in ticks (4.9152 per microsecond, exact).
-  const motion::Tick horizon = static_cast<motion::Tick>(uint64_t{layout.step_horizon_us} * 3072 / 625);
+  const motion::Tick horizon =
+      static_cast<motion::Tick>(uint64_t{layout.step_horizon_us} * 3072 / 625);
   for (sim::AxisMachine& m : machine_.axes) m.set_horizon(horizon);
   step_wake_us_ = std::max<uint64_t>(kPollUs, layout.step_horizon_us / 2);
   for (unsigned a = 0; a < layout.axes; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
-    if (layout.spm30_multiplexed) motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
+    if (layout.spm30_multiplexed)
+      motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
     cores_.push_back(std::make_unique<motion::AxisCore>(motors));
     axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, *cores_.back()));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) {
@@ -43,7 +45,8 @@ uint64_t AxisBank::next_deadline_us(uint64_t now_us) {
     motion::AxisCore& core = *c;
     if (!core.busy()) continue;
     const std::optional<motion::Tick> step = core.next_step_time();
-    next = earliest(next, step ? std::max(micros(*step), now_us + step_wake_us_) : poll_deadline(now_us));
+    next = earliest(next,
+                    step ? std::max(micros(*step), now_us + step_wake_us_) : poll_deadline(now_us));
   }
   return next;
 }

@@ -67,15 +67,19 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
                 NodeGuarding::Events{
                     .lost =
                         [this](uint64_t now) {
-                          spdlog::warn("life guarding: no node guarding request within the node life time");
+                          spdlog::warn(
+                              "life guarding: no node guarding request within the node life time");
                           // CiA 301: 0x8130 is "life guard error or heartbeat error".
-                          emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication, {}, now);
+                          emcy_.raise(emcy_code::kHeartbeatError, error_bits::kCommunication, {},
+                                      now);
                           communication_error(CommunicationError::LifeGuardingLost, 0, now);
                         },
                     .recovered =
                         [this](uint64_t now) {
-                          spdlog::info("life guarding: the master's requests are back (or guarding is off)");
-                          if (!consumer_.any_timed_out()) emcy_.clear(emcy_code::kHeartbeatError, now);
+                          spdlog::info(
+                              "life guarding: the master's requests are back (or guarding is off)");
+                          if (!consumer_.any_timed_out())
+                            emcy_.clear(emcy_code::kHeartbeatError, now);
                           if (app_) app_->life_guarding_recovered(now);
                         }}),
       sync_(
@@ -87,9 +91,10 @@ CanopenNode::CanopenNode(NodeOptions options, Send send_frame)
           [this](uint8_t dlc, uint64_t now) {
             emcy_.report(emcy_code::kSyncLength, error_bits::kCommunication, {dlc}, now);
           }),
-      time_(dictionary_, [this](const od::CanFrame& f) { send(f); }, options_.wall_clock),
-      pdo_(dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); },
-           emcy_),
+      time_(
+          dictionary_, [this](const od::CanFrame& f) { send(f); }, options_.wall_clock),
+      pdo_(
+          dictionary_, options_.layout.pdos(), [this](const od::CanFrame& f) { send(f); }, emcy_),
       sdo_(dictionary_, options_.sdo_timeout_us, [this](const od::CanFrame& f) { send(f); }),
       lss_(identity_of(options_.device), options_.device.node_id,
            lss_stored_ ? lss_stored_->bit_timing : std::nullopt,
@@ -131,10 +136,12 @@ void CanopenNode::install_service_hooks() {
     od::listen(od.at(index, 0), [this] { sync_.reset(0); });
   // The objects whose values decide which CAN-IDs the node receives.
   for (auto& [index, obj] : od.objects()) {
-    const bool filtered = index == 0x1005 || index == 0x1012 || index == 0x1014 || index == 0x1016 ||
-                          (index >= 0x1200 && index <= 0x1203) || (index >= 0x1400 && index <= 0x17FF);
+    const bool filtered = index == 0x1005 || index == 0x1012 || index == 0x1014 ||
+                          index == 0x1016 || (index >= 0x1200 && index <= 0x1203) ||
+                          (index >= 0x1400 && index <= 0x17FF);
     if (!filtered) continue;
-    for (auto& [sub, e] : od.object(index)->entries) od::listen(e, [this] { filters_dirty_ = true; });
+    for (auto& [sub, e] : od.object(index)->entries)
+      od::listen(e, [this] { filters_dirty_ = true; });
   }
   // 0x1021: the device's own EDS, generated from this dictionary when read.
   od.at(0x1021, 0).on_read = [this](od::Bytes& v) {
@@ -144,9 +151,11 @@ void CanopenNode::install_service_hooks() {
 
 void CanopenNode::start(uint64_t now_us) {
   if (auto index = lss_.active_bit_timing())
-    spdlog::info("LSS: stored bit timing {} kbit/s (table index {}); stepnode does not set the interface's bit "
-                 "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
-                 *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
+    spdlog::info(
+        "LSS: stored bit timing {} kbit/s (table index {}); stepnode does not set the interface's "
+        "bit "
+        "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
+        *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
   initialise(true, now_us);
 }
 
@@ -162,7 +171,8 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
     for (const uint16_t index : {od::rpdo_mapping(n), od::tpdo_mapping(n)}) {
       od::SdoAbort a = od::check_mapping_record(dictionary_, index);
       if (a == od::SdoAbort::None) continue;
-      spdlog::warn("stored PDO mapping {:04X} is not valid ({}); default mapping kept", index, od::abort_text(a));
+      spdlog::warn("stored PDO mapping {:04X} is not valid ({}); default mapping kept", index,
+                   od::abort_text(a));
       dictionary_.reset_to_defaults(index, index);
       report.refuse({index, 0});
     }
@@ -174,7 +184,10 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
   ParameterStore::Key key = report.first_refused.value_or(ParameterStore::Key{0, 0});
   emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
                {static_cast<uint8_t>(key.first), static_cast<uint8_t>(key.first >> 8), key.second,
-                static_cast<uint8_t>(std::min(report.refused, 255u)), static_cast<uint8_t>(!report.damaged ? 0 : report.set_aside ? 1 : 2)},
+                static_cast<uint8_t>(std::min(report.refused, 255u)),
+                static_cast<uint8_t>(!report.damaged    ? 0
+                                     : report.set_aside ? 1
+                                                        : 2)},
                now_us);
 }
 
@@ -202,14 +215,15 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   booted_ = true;
   if (reset_application) {
     load_parameters(0x1000, 0x9FFF, now_us);
-    for (const auto& e : power_up_errors_) emcy_.report(e.code, error_bits::kGeneric, e.manufacturer, now_us);
+    for (const auto& e : power_up_errors_)
+      emcy_.report(e.code, error_bits::kGeneric, e.manufacturer, now_us);
     if (app_) app_->reset_application(now_us);
   } else {
     load_parameters(0x1000, 0x1FFF, now_us);
   }
   pdo_.mark_dirty();
   filters_dirty_ = true;  // stored COB-IDs; the boot-up below goes out with the filters set
-  sdo_.reconfigure();  // 0x1201..0x1203 as stored (or configured)
+  sdo_.reconfigure();     // 0x1201..0x1203 as stored (or configured)
   consumer_.reset();
   guarding_.reset();  // the toggle bit starts at 0 again only here (CiA 301 7.2.8.3.1)
   sync_.reset(now_us);
@@ -244,12 +258,15 @@ void CanopenNode::on_lss_frame(const od::CanFrame& frame, uint64_t now_us) {
   if (r.response) send(*r.response);
   if (r.activate_bit_timing_delay_ms) {
     const auto index = lss_.active_bit_timing();
-    spdlog::warn("LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's bit "
-                 "rate; apply it with `tools/lss-bit-timing {} IFACE --apply` (ip link, root)",
-                 index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms, options_.state_dir.string());
+    spdlog::warn(
+        "LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's bit "
+        "rate; apply it with `tools/lss-bit-timing {} IFACE --apply` (ip link, root)",
+        index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms,
+        options_.state_dir.string());
   }
   if (r.boot) {
-    spdlog::info("LSS: node-ID {} configured: reset communication and boot-up", lss_.pending_node_id());
+    spdlog::info("LSS: node-ID {} configured: reset communication and boot-up",
+                 lss_.pending_node_id());
     initialise(false, now_us);
   }
 }
@@ -284,9 +301,11 @@ void CanopenNode::handle_nmt(NmtCommand command, uint64_t now_us) {
 
 void CanopenNode::communication_error(CommunicationError error, uint8_t node, uint64_t now_us) {
   if (app_) app_->communication_error(error, node, now_us);
-  const uint8_t behaviour = dictionary_.get<uint8_t>(od::kErrorBehaviour, od::kCommunicationErrorSub);
+  const uint8_t behaviour =
+      dictionary_.get<uint8_t>(od::kErrorBehaviour, od::kCommunicationErrorSub);
   if (auto next = state_after_communication_error(behaviour, state_)) {
-    spdlog::warn("communication error: 0x1029 sub 1 = {} takes the node to {}", behaviour, state_name(*next));
+    spdlog::warn("communication error: 0x1029 sub 1 = {} takes the node to {}", behaviour,
+                 state_name(*next));
     enter(*next, now_us);
   }
 }
@@ -294,20 +313,25 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
 void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us) {
   // Manufacturer bytes: the COB-ID heard (LE), 1 if this node gave its node-ID up.
   const bool yield = finding.action == NodeIdConflict::Action::Yield;
-  const std::array<uint8_t, 5> info{static_cast<uint8_t>(finding.cob_id), static_cast<uint8_t>(finding.cob_id >> 8),
+  const std::array<uint8_t, 5> info{static_cast<uint8_t>(finding.cob_id),
+                                    static_cast<uint8_t>(finding.cob_id >> 8),
                                     static_cast<uint8_t>(yield), 0, 0};
   if (yield) {
-    spdlog::error("node-ID {} is already used by another device (0x{:03X} heard within {} s of boot-up): this node "
-                  "gives it up and waits for an LSS master", node_id(), finding.cob_id,
-                  NodeIdConflict::kClaimPeriodUs / 1'000'000);
+    spdlog::error(
+        "node-ID {} is already used by another device (0x{:03X} heard within {} s of boot-up): "
+        "this node "
+        "gives it up and waits for an LSS master",
+        node_id(), finding.cob_id, NodeIdConflict::kClaimPeriodUs / 1'000'000);
     emcy_.report(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
     lss_.give_up_node_id();
     initialise(false, now_us);
     return;
   }
   if (!emcy_.active(emcy_code::kCommunication))
-    spdlog::error("node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps it",
-                  node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
+    spdlog::error(
+        "node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps "
+        "it",
+        node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
   // A newcomer that booted with this node-ID hears this node's heartbeat within its claim
   // period; first, so that it yields to the heartbeat rather than to the EMCY.
   if (finding.boot_up) heartbeat_.send_now(state_, now_us);
@@ -344,12 +368,14 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   // Without a node-ID only a broadcast reaches the node, and only a reset means anything
   // in NMT initialisation: it applies a node-ID configured over LSS.
   if (auto command = decode_nmt(frame, configured() ? node_id() : 0)) {
-    if (configured() || *command == NmtCommand::ResetNode || *command == NmtCommand::ResetCommunication)
+    if (configured() || *command == NmtCommand::ResetNode ||
+        *command == NmtCommand::ResetCommunication)
       handle_nmt(*command, now_us);
     return;
   }
   if (!configured()) return;
-  if (auto conflict = conflict_.on_frame(frame, od::decode<uint32_t>(emcy_cob_id_->value), now_us)) {
+  if (auto conflict =
+          conflict_.on_frame(frame, od::decode<uint32_t>(emcy_cob_id_->value), now_us)) {
     node_id_conflict(*conflict, now_us);
     return;
   }
@@ -412,7 +438,8 @@ const std::vector<ReceiveFilter>& CanopenNode::receive_filters() {
 
 void CanopenNode::update_receive_filters() {
   filters_dirty_ = false;
-  std::vector<ReceiveFilter> next = node::receive_filters(dictionary_, node_id(), options_.layout.pdos());
+  std::vector<ReceiveFilter> next =
+      node::receive_filters(dictionary_, node_id(), options_.layout.pdos());
   if (next == filters_) return;
   filters_ = std::move(next);
   spdlog::debug("receive filters: {} CAN-IDs", filters_.size());
@@ -428,8 +455,8 @@ void CanopenNode::on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
   spdlog::warn("CAN receive queue overflow: {} frames dropped ({} since reset)", lost, total);
   // CiA 301: 0x8110 CAN overrun (objects lost); manufacturer bytes: frames lost, LE.
   emcy_.report(emcy_code::kCanOverrun, error_bits::kCommunication,
-               {static_cast<uint8_t>(lost), static_cast<uint8_t>(lost >> 8), static_cast<uint8_t>(lost >> 16),
-                static_cast<uint8_t>(lost >> 24), 0},
+               {static_cast<uint8_t>(lost), static_cast<uint8_t>(lost >> 8),
+                static_cast<uint8_t>(lost >> 16), static_cast<uint8_t>(lost >> 24), 0},
                now_us);
 }
 
@@ -438,9 +465,7 @@ void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
     case BusEvent::ErrorPassive:
       emcy_.raise(emcy_code::kCanErrorPassive, error_bits::kCommunication, {}, now_us);
       break;
-    case BusEvent::ErrorActive:
-      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
-      break;
+    case BusEvent::ErrorActive: emcy_.clear(emcy_code::kCanErrorPassive, now_us); break;
     case BusEvent::Restarted:
       // "Recovered from bus-off" first, then the error reset that ends the error-passive
       // condition the bus-off came through, with the error register as it is now.
@@ -456,8 +481,7 @@ void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
       // cannot reach the node either: a communication error (CiA 301 0x1029).
       communication_error(CommunicationError::BusOff, 0, now_us);
       break;
-    case BusEvent::ErrorWarning:
-      break;  // logged by the transport
+    case BusEvent::ErrorWarning: break;  // logged by the transport
   }
 }
 

@@ -1,6 +1,7 @@
 // One CANopen slave (CiA 301): the dictionary and every communication service, driven by
 // frames and time passed in. No sockets and no clocks here, so tests run in virtual time;
-// node/device.* puts the profiles behind it and node/main.cpp connects it to SocketCAN and CLOCK_MONOTONIC.
+// node/device.* puts the profiles behind it and node/main.cpp connects it to SocketCAN and
+// CLOCK_MONOTONIC.
 #pragma once
 #include <cstdint>
 #include <filesystem>
@@ -9,6 +10,7 @@
 #include <optional>
 
 #include "node/application.hpp"
+#include "node/device_objects.hpp"
 #include "node/emcy.hpp"
 #include "node/heartbeat.hpp"
 #include "node/lss_slave.hpp"
@@ -23,7 +25,6 @@
 #include "node/sync.hpp"
 #include "node/time_service.hpp"
 #include "od/can_frame.hpp"
-#include "node/device_objects.hpp"
 #include "od/communication_objects.hpp"
 #include "od/dictionary.hpp"
 
@@ -45,7 +46,15 @@ struct NodeOptions {
 };
 
 // What the CAN controller reports (SocketCAN error frames), as the node sees it.
-enum class BusEvent { ErrorWarning, ErrorPassive, ErrorActive, BusOff, Restarted, RxOverflow, TxOverflow };
+enum class BusEvent {
+  ErrorWarning,
+  ErrorPassive,
+  ErrorActive,
+  BusOff,
+  Restarted,
+  RxOverflow,
+  TxOverflow
+};
 
 class CanopenNode {
  public:

@@ -16,7 +16,8 @@ namespace {
 std::filesystem::path default_state_dir() {
   if (const char* s = std::getenv("STATE_DIRECTORY")) return s;  // systemd StateDirectory=
   if (const char* s = std::getenv("XDG_STATE_HOME")) return std::filesystem::path(s) / "stepnode";
-  if (const char* h = std::getenv("HOME")) return std::filesystem::path(h) / ".local/state/stepnode";
+  if (const char* h = std::getenv("HOME"))
+    return std::filesystem::path(h) / ".local/state/stepnode";
   return "/var/lib/stepnode";
 }
 
@@ -34,7 +35,8 @@ bool load_node_id(const config::TomlFile& file, NodeConfig& cfg, bool id_given) 
   if (!v) return false;
   const int64_t id = v->value_exact<int64_t>().value_or(-1);  // -1: not an integer
   const bool none = v->value_exact<std::string>() == "none" || id == lss::kUnconfigured;
-  if (!none && (id < 1 || id > 127)) file.refuse("node_id", "must be an integer 1..127, or \"none\" (255)");
+  if (!none && (id < 1 || id > 127))
+    file.refuse("node_id", "must be an integer 1..127, or \"none\" (255)");
   if (!id_given) {
     cfg.options.device.node_id = none ? lss::kUnconfigured : static_cast<uint8_t>(id);
     cfg.options.node_id_origin = none ? NodeIdOrigin::None : NodeIdOrigin::ConfigFile;
@@ -83,20 +85,37 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   if (auto us = file.integer("tick_us", 100, 10'000'000)) cfg.tick_us = static_cast<uint64_t>(*us);
   if (auto us = file.integer("step_horizon_us", 0, 1'000'000))
     cfg.options.layout.step_horizon_us = static_cast<uint32_t>(*us);
-  if (auto n = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes))) cfg.options.layout.axes = static_cast<unsigned>(*n);
+  if (auto n = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes)))
+    cfg.options.layout.axes = static_cast<unsigned>(*n);
   if (auto on = file.boolean("spm30_multiplexed")) {
     // SPM30 3-axis models: one register set and %Q1..%Q3 select one of three motors.
     cfg.options.layout.spm30_multiplexed = *on;
     if (*on) cfg.options.layout.axes = 1;
   }
   load_profiles(file, cfg.options.layout);
-  if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll)) cfg.options.device.serial_number = static_cast<uint32_t>(*n);
+  if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll))
+    cfg.options.device.serial_number = static_cast<uint32_t>(*n);
   if (auto level = file.string("log_level")) cfg.log_level = *level;
   // self_start: the default of 0x1F80 NMT startup (CiA 302-2 bit 2: 0 = enter operational
   // by itself after boot-up); [defaults] "1F80" and a stored value go over it.
-  if (auto on = file.boolean("self_start")) cfg.object_defaults.emplace_back("1F80", *on ? "0" : "4");
+  if (auto on = file.boolean("self_start"))
+    cfg.object_defaults.emplace_back("1F80", *on ? "0" : "4");
   load_object_defaults(file, cfg);
   return id_set;
+}
+
+// --serial-number: an UNSIGNED32, decimal or 0x hex.
+uint32_t parse_serial_number(const std::string& text) {
+  unsigned long long n = 0;
+  size_t used = 0;
+  try {
+    n = std::stoull(text, &used, 0);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || n > 0xFFFFFFFFull || text[0] == '-')
+    throw UsageError("--serial-number " + text + ": must be an integer 0..4294967295 (or 0x...)");
+  return static_cast<uint32_t>(n);
 }
 
 }  // namespace
@@ -113,11 +132,14 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   app.add_option("--node-id", node_id,
                  "CANopen node id, 1..127, or none (255): no id, the node waits for an LSS master "
                  "(an id an LSS master stored is used then, else the config file's)");
-  app.add_option("--serial-number", serial_number,
-                 "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
+  app.add_option(
+      "--serial-number", serial_number,
+      "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
   app.add_option("--config", config_file, "TOML config file (see README)");
   app.add_option("--state-dir", state_dir, "where stored parameters (0x1010) are kept");
-  app.add_option("--tick-us", cfg.tick_us, "the longest the node sleeps between its deadlines, in microseconds (100..10000000, default 1000000)");
+  app.add_option("--tick-us", cfg.tick_us,
+                 "the longest the node sleeps between its deadlines, in microseconds "
+                 "(100..10000000, default 1000000)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
   app.add_flag("--print-eds", cfg.print_eds, "print the device's EDS (CiA 306) and exit");
   try {
@@ -133,7 +155,8 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (!config_file.empty()) {
     // "--node-id none" gives no id: the config file's applies (after one stored over LSS).
     const bool id_given = id_known && node_id != "none" && node_id != "255";
-    id_known |= load_config_file(config_file, cfg, {!cfg.iface.empty(), id_given, !state_dir.empty()});
+    id_known |=
+        load_config_file(config_file, cfg, {!cfg.iface.empty(), id_given, !state_dir.empty()});
   }
   if (app.count("--node-id")) {
     int id = -1;
@@ -156,33 +179,25 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
       cfg.options.node_id_origin = NodeIdOrigin::CommandLine;
     }
   }
-  if (app.count("--serial-number")) {
-    unsigned long long n = 0;
-    size_t used = 0;
-    try {
-      n = std::stoull(serial_number, &used, 0);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != serial_number.size() || n > 0xFFFFFFFFull || serial_number[0] == '-')
-      throw UsageError("--serial-number " + serial_number + ": must be an integer 0..4294967295 (or 0x...)");
-    cfg.options.device.serial_number = static_cast<uint32_t>(n);
-  }
+  if (app.count("--serial-number"))
+    cfg.options.device.serial_number = parse_serial_number(serial_number);
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
   if (cfg.tick_us < 100 || cfg.tick_us > 10'000'000)
     throw UsageError("--tick-us " + std::to_string(cfg.tick_us) + ": must be 100..10000000");
   static const char* levels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (std::find(std::begin(levels), std::end(levels), cfg.log_level) == std::end(levels))
-    throw UsageError("--log-level " + cfg.log_level + ": must be one of trace, debug, info, warn, error, critical, off");
+    throw UsageError("--log-level " + cfg.log_level +
+                     ": must be one of trace, debug, info, warn, error, critical, off");
   if (cfg.print_eds) return cfg;
   if (cfg.iface.empty()) throw UsageError("--iface is required (e.g. --iface vcan0)");
-  if (!id_known) throw UsageError("--node-id is required (1..127, or none for a node an LSS master configures)");
+  if (!id_known)
+    throw UsageError("--node-id is required (1..127, or none for a node an LSS master configures)");
   return cfg;
 }
 
-std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
-                                                  const std::vector<std::pair<std::string, std::string>>& defaults) {
+std::vector<RefusedMapping> apply_object_defaults(
+    od::Dictionary& od, const std::vector<std::pair<std::string, std::string>>& defaults) {
   // The built-in records of the mappings the file touches, to go back to.
   std::map<uint16_t, std::map<uint8_t, od::Bytes>> built_in;
   for (const auto& [key, text] : defaults) {
@@ -190,7 +205,8 @@ std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
     char extra = 0;
     int n = std::sscanf(key.c_str(), "%x:%x%c", &index, &sub, &extra);
     if (n < 1 || n > 2 || index > 0xFFFF || sub > 0xFF)
-      throw UsageError("defaults: '" + key + "' is not INDEX or INDEX:SUB in hex (e.g. \"1017\" or \"1016:1\")");
+      throw UsageError("defaults: '" + key +
+                       "' is not INDEX or INDEX:SUB in hex (e.g. \"1017\" or \"1016:1\")");
     od::Entry* e = od.find(static_cast<uint16_t>(index), static_cast<uint8_t>(sub));
     if (!e || !od::writable(e->access))
       throw UsageError("defaults: object " + key + " does not exist or is not writable");
@@ -201,10 +217,16 @@ std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
       throw UsageError("defaults: " + key + ": " + ex.what());
     }
     if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
-      throw UsageError(std::string("defaults: ").append(key).append(" = ").append(text).append(": ").append(od::abort_text(a)));
+      throw UsageError(std::string("defaults: ")
+                           .append(key)
+                           .append(" = ")
+                           .append(text)
+                           .append(": ")
+                           .append(od::abort_text(a)));
     const auto at = static_cast<uint16_t>(index);
     if ((od::is_rpdo_mapping(at) || od::is_tpdo_mapping(at)) && !built_in.contains(at))
-      for (const auto& [sub_index, entry] : od.object(at)->entries) built_in[at][sub_index] = entry.default_value;
+      for (const auto& [sub_index, entry] : od.object(at)->entries)
+        built_in[at][sub_index] = entry.default_value;
     e->default_value = value;
     e->value = value;
   }

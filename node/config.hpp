@@ -15,7 +15,8 @@ namespace stepnode::node {
 struct NodeConfig {
   std::string iface;
   NodeOptions options;
-  uint64_t tick_us = 1'000'000;  // the longest the node sleeps (issue 13: it wakes for its deadlines)
+  uint64_t tick_us =
+      1'000'000;  // the longest the node sleeps (issue 13: it wakes for its deadlines)
   std::string log_level = "info";
   // Object defaults from the config's [defaults] table: "1017" or "1016:1" -> value text.
   std::vector<std::pair<std::string, std::string>> object_defaults;
@@ -45,7 +46,7 @@ struct RefusedMapping {
 // wrong on its face. A mapping record whose entries each fit but which, as a whole, the
 // device cannot use keeps its built-in default and is returned: the node starts and says
 // so (EMCY 0x6100), as it does for such a stored mapping.
-std::vector<RefusedMapping> apply_object_defaults(od::Dictionary& od,
-                                                  const std::vector<std::pair<std::string, std::string>>& defaults);
+std::vector<RefusedMapping> apply_object_defaults(
+    od::Dictionary& od, const std::vector<std::pair<std::string, std::string>>& defaults);
 
 }  // namespace stepnode::node

@@ -12,30 +12,37 @@
 
 namespace stepnode::node {
 
-Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults, CanopenNode::Send send)
+Device::Device(const NodeOptions& options, const ObjectDefaults& object_defaults,
+               CanopenNode::Send send)
     : canopen_(options, std::move(send)),
       refused_(complete_dictionary(canopen_, options.layout, object_defaults)),
       axes_(options.layout) {
   od::Dictionary& od = canopen_.dictionary();
   // The order they are called in: the back end's settings first, then the front ends.
   profiles_.push_back(std::make_unique<SimService>(od, axes_));
-  if (options.layout.horner) profiles_.push_back(std::make_unique<HornerService>(od, axes_, canopen_.emcy()));
-  if (options.layout.hp) profiles_.push_back(std::make_unique<HpService>(od, axes_, canopen_.emcy()));
-  if (options.layout.cia402) profiles_.push_back(std::make_unique<Cia402Service>(od, axes_, canopen_.emcy()));
+  if (options.layout.horner)
+    profiles_.push_back(std::make_unique<HornerService>(od, axes_, canopen_.emcy()));
+  if (options.layout.hp)
+    profiles_.push_back(std::make_unique<HpService>(od, axes_, canopen_.emcy()));
+  if (options.layout.cia402)
+    profiles_.push_back(std::make_unique<Cia402Service>(od, axes_, canopen_.emcy()));
   register_axes_ = options.layout.horner || options.layout.hp;
   for (const RefusedMapping& r : refused_) {
-    spdlog::warn("config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
-                 r.index, od::abort_text(r.reason));
+    spdlog::warn(
+        "config: PDO mapping {:04X} is not valid on this device ({}); its built-in mapping is kept",
+        r.index, od::abort_text(r.reason));
     // EMCY 0x6100 after boot-up, manufacturer bytes: the record's index, little-endian.
-    canopen_.report_at_power_up(emcy_code::kSoftware,
-                                {static_cast<uint8_t>(r.index), static_cast<uint8_t>(r.index >> 8), 0, 0, 0});
+    canopen_.report_at_power_up(
+        emcy_code::kSoftware,
+        {static_cast<uint8_t>(r.index), static_cast<uint8_t>(r.index >> 8), 0, 0, 0});
   }
   canopen_.set_application(this);
 }
 
 Device::~Device() { canopen_.set_application(nullptr); }
 
-std::vector<RefusedMapping> Device::complete_dictionary(CanopenNode& canopen, const DeviceLayout& layout,
+std::vector<RefusedMapping> Device::complete_dictionary(CanopenNode& canopen,
+                                                        const DeviceLayout& layout,
                                                         const ObjectDefaults& object_defaults) {
   add_profile_objects(canopen.dictionary(), layout);
   return apply_object_defaults(canopen.dictionary(), object_defaults);
@@ -98,7 +105,8 @@ void Device::state_changed(NmtState state, uint64_t now_us) {
   // Initialising is only reported for a node that lost its node-ID over LSS: unreachable
   // as well.
   if (state == NmtState::Stopped || state == NmtState::Initialising) {
-    spdlog::warn("NMT {}: every moving axis ramps down", state == NmtState::Stopped ? "stopped" : "initialising (no node-ID)");
+    spdlog::warn("NMT {}: every moving axis ramps down",
+                 state == NmtState::Stopped ? "stopped" : "initialising (no node-ID)");
     master_lost(now_us);
   }
 }
@@ -108,9 +116,10 @@ void Device::communication_error(CommunicationError error, uint8_t node, uint64_
   // Life guarding is the guarding master's own check: its loss is the master's, like a lost
   // heartbeat of the master (README, "Communication errors and NMT states").
   spdlog::warn("{}: every moving axis ramps down",
-               error == CommunicationError::BusOff             ? std::string("bus-off")
-               : error == CommunicationError::LifeGuardingLost ? std::string("life guarding (the guarding master) lost")
-                                                               : "master (node " + std::to_string(node) + ") lost");
+               error == CommunicationError::BusOff ? std::string("bus-off")
+               : error == CommunicationError::LifeGuardingLost
+                   ? std::string("life guarding (the guarding master) lost")
+                   : "master (node " + std::to_string(node) + ") lost");
   master_lost(now_us);
 }
 

@@ -76,15 +76,16 @@ class Device final : private Application {
   void publish();
 
   // The profiles' objects, then the configuration's defaults over them.
-  static std::vector<RefusedMapping> complete_dictionary(CanopenNode& canopen, const DeviceLayout& layout,
+  static std::vector<RefusedMapping> complete_dictionary(CanopenNode& canopen,
+                                                         const DeviceLayout& layout,
                                                          const ObjectDefaults& object_defaults);
 
   CanopenNode canopen_;
   std::vector<RefusedMapping> refused_;  // before the services: they load what it leaves
   AxisBank axes_;
   std::vector<std::unique_ptr<Profile>> profiles_;  // called in this order
-  uint64_t frame_arrival_us_ = 0;  // the frame being handled (0: none, or unknown)
-  bool register_axes_ = true;      // Horner or HP: the register front ends' master-lost rule
+  uint64_t frame_arrival_us_ = 0;                   // the frame being handled (0: none, or unknown)
+  bool register_axes_ = true;  // Horner or HP: the register front ends' master-lost rule
   FilterSink filter_sink_;
 };
 

@@ -3,12 +3,12 @@
 #include <cstdio>
 
 #include "node/diagnostic_objects.hpp"
-#include "od/cob_id.hpp"
 #include "node/profiles/cia402/objects.hpp"
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/hp44714a/objects.hpp"
 #include "node/profiles/sim/objects.hpp"
 #include "node/profiles/user/objects.hpp"
+#include "od/cob_id.hpp"
 
 namespace stepnode::node {
 
@@ -26,10 +26,12 @@ std::string DeviceLayout::description() const {
   if (cia402) add("CiA 402");
   if (user) add("user objects");
   if (out.empty()) out = "no profile";
-  return out + "; " + std::to_string(axes) + (axes == 1 ? " axis" : " axes") + " on the simulated machine";
+  return out + "; " + std::to_string(axes) + (axes == 1 ? " axis" : " axes") +
+         " on the simulated machine";
 }
 
-void add_node_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout) {
+void add_node_objects(od::Dictionary& dictionary, const od::DeviceInfo& info,
+                      const DeviceLayout& layout) {
   od::build_communication_objects(dictionary, info, layout.pdos());
   add_diagnostic_objects(dictionary);
 }
@@ -41,7 +43,8 @@ void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout)
   if (layout.cia402) {
     cia402::add_objects(dictionary, layout.axes);
     for (unsigned a = 0; a < layout.axes; ++a)
-      cia402::set_default_pdos(dictionary, a, layout.cia402_first_pdo(a), layout.cia402_first_pdo(a));
+      cia402::set_default_pdos(dictionary, a, layout.cia402_first_pdo(a),
+                               layout.cia402_first_pdo(a));
     // 1000h: a CiA 402 stepper drive (each axis' 67FFh says the same).
     od::Entry& type = dictionary.at(0x1000, 0);
     type.default_value = type.value = od::encode<uint32_t>(cia402::kDeviceTypeStepper);
@@ -57,7 +60,8 @@ void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout)
       od::Entry& cob = dictionary.at(static_cast<uint16_t>(comm + n), 1);
       const uint32_t invalid = od::decode<uint32_t>(cob.default_value) | od::kCobInvalid;
       cob.default_value = cob.value = od::encode<uint32_t>(invalid);
-      if (!cob.eds_default.empty()) {  // "$NODEID+0x180" (a pre-defined ID): the node id stays symbolic
+      if (!cob.eds_default
+               .empty()) {  // "$NODEID+0x180" (a pre-defined ID): the node id stays symbolic
         char text[32];
         std::snprintf(text, sizeof text, "$NODEID+0x%X", static_cast<unsigned>(invalid & ~0x7Fu));
         cob.eds_default = text;
@@ -65,7 +69,8 @@ void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout)
     }
 }
 
-void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout) {
+void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info,
+                          const DeviceLayout& layout) {
   add_node_objects(dictionary, info, layout);
   add_profile_objects(dictionary, layout);
 }

@@ -20,9 +20,9 @@ struct DeviceLayout {
   // SPM30 3-axis models: one register set (axis 1) multiplexes 3 motors, chosen with
   // %Q1..%Q3. Then axes = 1 and the simulated machine has 3 motors.
   bool spm30_multiplexed = false;
-  bool horner = true;  // the Horner register set (0x2n00-0x2n0A)
-  bool hp = true;      // the HP 44714A channels (0x2n10-0x2n1E)
-  bool user = true;    // the user objects (0x2F00, 0x2F01)
+  bool horner = true;   // the Horner register set (0x2n00-0x2n0A)
+  bool hp = true;       // the HP 44714A channels (0x2n10-0x2n1E)
+  bool user = true;     // the user objects (0x2F00, 0x2F01)
   bool cia402 = false;  // the CiA 402 drive (0x6000 + 0x800 per axis)
   // How far ahead of its time a step is given to the back end's step port (0: as it falls
   // due). The simulated machine reproduces every step train at any horizon; a hardware
@@ -42,10 +42,12 @@ struct DeviceLayout {
 };
 
 // The communication objects and the node's diagnostics (what the CiA 301 slave needs).
-void add_node_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout);
+void add_node_objects(od::Dictionary& dictionary, const od::DeviceInfo& info,
+                      const DeviceLayout& layout);
 // The tables of the profiles in `layout`, with their default PDO mappings.
 void add_profile_objects(od::Dictionary& dictionary, const DeviceLayout& layout);
 // Both: every object of the device.
-void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info, const DeviceLayout& layout);
+void build_device_objects(od::Dictionary& dictionary, const od::DeviceInfo& info,
+                          const DeviceLayout& layout);
 
 }  // namespace stepnode::node

@@ -21,7 +21,8 @@ void EmcyProducer::update_register() {
 void EmcyProducer::push_history(uint16_t code, std::array<uint8_t, 5> manufacturer) {
   // Newest at sub 1 (CiA 301 7.5.2.3); the field holds the code and 16 bits of extra info.
   for (unsigned i = od::kErrorHistoryLength; i > 1; --i)
-    dictionary_.set(0x1003, static_cast<uint8_t>(i), dictionary_.value(0x1003, static_cast<uint8_t>(i - 1)));
+    dictionary_.set(0x1003, static_cast<uint8_t>(i),
+                    dictionary_.value(0x1003, static_cast<uint8_t>(i - 1)));
   uint32_t info = static_cast<uint32_t>(manufacturer[0] | (manufacturer[1] << 8));
   dictionary_.put<uint32_t>(0x1003, 1, code | (info << 16));
   uint8_t count = dictionary_.get<uint8_t>(0x1003, 0);
@@ -48,8 +49,8 @@ void EmcyProducer::raise(uint16_t code, uint8_t register_bits, std::array<uint8_
   enqueue(code, manufacturer, now_us);
 }
 
-void EmcyProducer::report(uint16_t code, uint8_t register_bits,
-                          std::array<uint8_t, 5> manufacturer, uint64_t now_us) {
+void EmcyProducer::report(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer,
+                          uint64_t now_us) {
   // The register shows the event in the message itself, then falls back.
   active_[code] = register_bits;
   update_register();

@@ -27,17 +27,18 @@ constexpr uint8_t kManufacturer = 0x80;
 // Emergency error codes this device raises (CiA 301 table 21).
 namespace emcy_code {
 constexpr uint16_t kNoError = 0x0000;
-constexpr uint16_t kDataStorage = 0x5530;   // stored parameters damaged or refused
-constexpr uint16_t kSoftware = 0x6100;      // internal software: a configured value refused
-constexpr uint16_t kCommunication = 0x8100;  // communication, generic: another device has our node-ID
+constexpr uint16_t kDataStorage = 0x5530;  // stored parameters damaged or refused
+constexpr uint16_t kSoftware = 0x6100;     // internal software: a configured value refused
+constexpr uint16_t kCommunication =
+    0x8100;  // communication, generic: another device has our node-ID
 constexpr uint16_t kCanOverrun = 0x8110;
 constexpr uint16_t kCanErrorPassive = 0x8120;
 constexpr uint16_t kHeartbeatError = 0x8130;
 constexpr uint16_t kRecoveredFromBusOff = 0x8140;
-constexpr uint16_t kPdoLength = 0x8210;          // PDO not processed: length error
+constexpr uint16_t kPdoLength = 0x8210;  // PDO not processed: length error
 constexpr uint16_t kPdoLengthExceeded = 0x8220;
 constexpr uint16_t kRpdoTimeout = 0x8250;
-constexpr uint16_t kSyncLength = 0x8240;         // unexpected SYNC data length
+constexpr uint16_t kSyncLength = 0x8240;  // unexpected SYNC data length
 }  // namespace emcy_code
 
 class EmcyProducer {

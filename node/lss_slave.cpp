@@ -28,7 +28,8 @@ std::optional<unsigned> bit_rate_kbit(uint8_t table_index) {
 
 }  // namespace lss
 
-LssSlave::LssSlave(lss::Identity identity, uint8_t node_id, std::optional<uint8_t> bit_timing, Store store)
+LssSlave::LssSlave(lss::Identity identity, uint8_t node_id, std::optional<uint8_t> bit_timing,
+                   Store store)
     : identity_(identity),
       store_(std::move(store)),
       active_node_id_(node_id),
@@ -82,7 +83,8 @@ LssSlave::Result LssSlave::on_frame(const od::CanFrame& frame) {
     return out;
   }
   if (state_ == lss::State::Waiting) {
-    if (command >= kSwitchSelectiveVendor && command <= kSwitchSelectiveSerial) switch_selective(command, value, out);
+    if (command >= kSwitchSelectiveVendor && command <= kSwitchSelectiveSerial)
+      switch_selective(command, value, out);
     else if (command == kFastScan) fast_scan(frame, out);
     return out;  // the configuration services are for a device in configuration only
   }
@@ -142,7 +144,8 @@ void LssSlave::fast_scan(const od::CanFrame& frame, Result& out) {
   if (configured()) return;
   const uint32_t id_number = od::get_u32(&frame.data[1]);
   const uint8_t bit_checked = frame.data[5], lss_sub = frame.data[6], lss_next = frame.data[7];
-  if ((bit_checked > 31 && bit_checked != lss::kFastScanConfirm) || lss_sub > 3 || lss_next > 3) return;
+  if ((bit_checked > 31 && bit_checked != lss::kFastScanConfirm) || lss_sub > 3 || lss_next > 3)
+    return;
   if (bit_checked == lss::kFastScanConfirm) {
     // Every device still unconfigured answers, and the scan starts again at the vendor-ID.
     fast_scan_position_ = 0;
@@ -186,7 +189,8 @@ void LssSlave::configuration_service(const od::CanFrame& frame, Result& out) {
       break;
     case kStoreConfiguration: {
       uint8_t error = lss::kStoreNotSupported;
-      if (store_) error = store_(pending_node_id_, pending_bit_timing_) ? lss::kOk : lss::kStoreMediaError;
+      if (store_)
+        error = store_(pending_node_id_, pending_bit_timing_) ? lss::kOk : lss::kStoreMediaError;
       out.response = answer(command, error);
       break;
     }

@@ -20,8 +20,8 @@ bool valid_node_id(unsigned id) { return (id >= 1 && id <= 127) || id == lss::kU
 
 LssStore::LssStore(const std::filesystem::path& state_dir, const lss::Identity& identity) {
   char name[64];
-  std::snprintf(name, sizeof name, "lss-%08x-%08x-%08x.conf", identity.vendor_id, identity.product_code,
-                identity.serial_number);
+  std::snprintf(name, sizeof name, "lss-%08x-%08x-%08x.conf", identity.vendor_id,
+                identity.product_code, identity.serial_number);
   file_ = state_dir / name;
 }
 
@@ -43,7 +43,8 @@ std::optional<LssStore::Contents> LssStore::load() const {
     if (key == "node_id" && fields >> value && valid_node_id(value)) {
       out.node_id = static_cast<uint8_t>(value);
       node_id = true;
-    } else if (key == "bit_timing" && fields >> value && value <= 0xFF && lss::bit_rate_kbit(static_cast<uint8_t>(value))) {
+    } else if (key == "bit_timing" && fields >> value && value <= 0xFF &&
+               lss::bit_rate_kbit(static_cast<uint8_t>(value))) {
       out.bit_timing = static_cast<uint8_t>(value);
     } else {
       header = false;  // a line that is not ours: the whole file is suspect

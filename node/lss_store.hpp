@@ -16,7 +16,7 @@ class LssStore {
  public:
   struct Contents {
     uint8_t node_id = lss::kUnconfigured;  // 1..127, or lss::kUnconfigured
-    std::optional<uint8_t> bit_timing;    // CiA 305 table index, when one was configured
+    std::optional<uint8_t> bit_timing;     // CiA 305 table index, when one was configured
     bool operator==(const Contents&) const = default;
   };
 

@@ -11,12 +11,12 @@
 #include <iostream>
 #include <string>
 
-#include "node/config.hpp"
-#include "node/device.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/link_info.hpp"
 #include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
+#include "node/config.hpp"
+#include "node/device.hpp"
 #include "od/eds.hpp"
 
 using namespace stepnode;
@@ -32,8 +32,10 @@ std::vector<node::BusEvent> bus_events(const canio::ReceivedFrame& r) {
     uint8_t s = r.controller_status;
     if (s & (CAN_ERR_CRTL_RX_OVERFLOW)) out.push_back(node::BusEvent::RxOverflow);
     if (s & (CAN_ERR_CRTL_TX_OVERFLOW)) out.push_back(node::BusEvent::TxOverflow);
-    if (s & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE)) out.push_back(node::BusEvent::ErrorPassive);
-    else if (s & (CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_TX_WARNING)) out.push_back(node::BusEvent::ErrorWarning);
+    if (s & (CAN_ERR_CRTL_RX_PASSIVE | CAN_ERR_CRTL_TX_PASSIVE))
+      out.push_back(node::BusEvent::ErrorPassive);
+    else if (s & (CAN_ERR_CRTL_RX_WARNING | CAN_ERR_CRTL_TX_WARNING))
+      out.push_back(node::BusEvent::ErrorWarning);
     if (s & CAN_ERR_CRTL_ACTIVE) out.push_back(node::BusEvent::ErrorActive);
   }
   return out;
@@ -47,7 +49,8 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
   clock_gettime(CLOCK_REALTIME, &real);
   int64_t real_now_ns = static_cast<int64_t>(real.tv_sec) * 1'000'000'000 + real.tv_nsec;
   int64_t age_us = (real_now_ns - static_cast<int64_t>(r.kernel_time_ns)) / 1000;
-  if (age_us < 0 || age_us > 100'000 || static_cast<uint64_t>(age_us) > now) return now;  // clock stepped
+  if (age_us < 0 || age_us > 100'000 || static_cast<uint64_t>(age_us) > now)
+    return now;  // clock stepped
   return now - static_cast<uint64_t>(age_us);
 }
 
@@ -58,17 +61,23 @@ void report_bit_timing(node::Device& device, const node::NodeConfig& cfg) {
   const auto link = index ? canio::link_info(cfg.iface) : std::nullopt;
   if (!link) return;
   const unsigned kbit = node::lss::bit_rate_kbit(*index).value_or(0);
-  const std::string hook = "tools/lss-bit-timing " + cfg.options.state_dir.string() + " " + cfg.iface + " --apply";
+  const std::string hook =
+      "tools/lss-bit-timing " + cfg.options.state_dir.string() + " " + cfg.iface + " --apply";
   if (link->kind == "vcan")
-    spdlog::warn("LSS: the stored bit timing {} kbit/s cannot be applied: {} is a virtual CAN interface without a "
-                 "bit rate", kbit, cfg.iface);
+    spdlog::warn(
+        "LSS: the stored bit timing {} kbit/s cannot be applied: {} is a virtual CAN interface "
+        "without a "
+        "bit rate",
+        kbit, cfg.iface);
   else if (!link->bit_rate)
-    spdlog::warn("LSS: stored bit timing {} kbit/s; {}'s bit rate is not known (kind \"{}\")", kbit, cfg.iface, link->kind);
+    spdlog::warn("LSS: stored bit timing {} kbit/s; {}'s bit rate is not known (kind \"{}\")", kbit,
+                 cfg.iface, link->kind);
   else if (*link->bit_rate != kbit * 1000)
-    spdlog::warn("LSS: the stored bit timing {} kbit/s differs from {}'s {} bit/s; apply it with `{}` (root)", kbit,
-                 cfg.iface, *link->bit_rate, hook);
-  else
-    spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
+    spdlog::warn(
+        "LSS: the stored bit timing {} kbit/s differs from {}'s {} bit/s; apply it with `{}` "
+        "(root)",
+        kbit, cfg.iface, *link->bit_rate, hook);
+  else spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
 }
 
 // The node's filters as the socket takes them; error frames only of the classes the node
@@ -88,13 +97,15 @@ void filter_socket(canio::SocketCan& can, node::Device& device) {
 uint64_t wall_clock_us() {
   timespec real{};
   clock_gettime(CLOCK_REALTIME, &real);
-  return static_cast<uint64_t>(real.tv_sec) * 1'000'000 + static_cast<uint64_t>(real.tv_nsec) / 1000;
+  return static_cast<uint64_t>(real.tv_sec) * 1'000'000 +
+         static_cast<uint64_t>(real.tv_nsec) / 1000;
 }
 
 int run(node::NodeConfig cfg) {
   canio::SocketCan can(cfg.iface);
   cfg.options.wall_clock = wall_clock_us;  // a TIME producer sends this host's time
-  node::Device device(cfg.options, cfg.object_defaults, [&can](const od::CanFrame& f) { can.send(f); });
+  node::Device device(cfg.options, cfg.object_defaults,
+                      [&can](const od::CanFrame& f) { can.send(f); });
   filter_socket(can, device);
 
   canio::EventLoop loop;
@@ -114,7 +125,8 @@ int run(node::NodeConfig cfg) {
                         : "waiting for an LSS master on " + cfg.iface);
     notifier.ready();
   };
-  if (uint64_t period = notifier.watchdog_period_us()) loop.every(period, [&] { notifier.watchdog(); });
+  if (uint64_t period = notifier.watchdog_period_us())
+    loop.every(period, [&] { notifier.watchdog(); });
   // The node's timed work: one absolute timer for its earliest deadline. A frame the
   // controller could not take yet is retried within a poll period, as the tick did.
   int timer = -1;
@@ -148,8 +160,9 @@ int run(node::NodeConfig cfg) {
     spdlog::info("node {} on {}, {} axes, parameters in {}", device.canopen().node_id(), cfg.iface,
                  cfg.options.layout.axes, device.canopen().parameter_file().string());
   else
-    spdlog::info("node without a node-ID on {} (LSS-unconfigured), {} axes, LSS configuration in {}", cfg.iface,
-                 cfg.options.layout.axes, device.canopen().lss_file().string());
+    spdlog::info(
+        "node without a node-ID on {} (LSS-unconfigured), {} axes, LSS configuration in {}",
+        cfg.iface, cfg.options.layout.axes, device.canopen().lss_file().string());
   report_bit_timing(device, cfg);
   device.start(canio::EventLoop::now_us());
   can.flush();

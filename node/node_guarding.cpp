@@ -8,10 +8,12 @@ NodeGuarding::NodeGuarding(const od::Dictionary& dictionary, uint8_t node_id, Ev
 bool NodeGuarding::heartbeat_in_use() const { return dictionary_.get<uint16_t>(0x1017, 0) != 0; }
 
 uint64_t NodeGuarding::life_time_us() const {
-  return uint64_t{dictionary_.get<uint16_t>(kGuardTime, 0)} * dictionary_.get<uint8_t>(kLifeTimeFactor, 0) * 1000;
+  return uint64_t{dictionary_.get<uint16_t>(kGuardTime, 0)} *
+         dictionary_.get<uint8_t>(kLifeTimeFactor, 0) * 1000;
 }
 
-std::optional<od::CanFrame> NodeGuarding::on_frame(const od::CanFrame& frame, NmtState state, uint64_t now_us) {
+std::optional<od::CanFrame> NodeGuarding::on_frame(const od::CanFrame& frame, NmtState state,
+                                                   uint64_t now_us) {
   if (!frame.rtr || frame.id != od::cob::kHeartbeat + node_id_) return std::nullopt;
   if (state == NmtState::Initialising || heartbeat_in_use()) return std::nullopt;
   started_ = true;
@@ -20,7 +22,8 @@ std::optional<od::CanFrame> NodeGuarding::on_frame(const od::CanFrame& frame, Nm
     lost_ = false;
     if (events_.recovered) events_.recovered(now_us);
   }
-  const auto byte = static_cast<uint8_t>((toggle_ ? 0x80 : 0x00) | (static_cast<uint8_t>(state) & 0x7F));
+  const auto byte =
+      static_cast<uint8_t>((toggle_ ? 0x80 : 0x00) | (static_cast<uint8_t>(state) & 0x7F));
   toggle_ = !toggle_;
   return od::CanFrame(od::cob::kHeartbeat + node_id_, {byte});
 }

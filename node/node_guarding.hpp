@@ -27,8 +27,9 @@ constexpr uint16_t kLifeTimeFactor = 0x100D;  // UNSIGNED8
 class NodeGuarding {
  public:
   struct Events {
-    std::function<void(uint64_t now_us)> lost;       // the life guarding event
-    std::function<void(uint64_t now_us)> recovered;  // a request came again, or guarding was switched off
+    std::function<void(uint64_t now_us)> lost;  // the life guarding event
+    std::function<void(uint64_t now_us)>
+        recovered;  // a request came again, or guarding was switched off
   };
   NodeGuarding(const od::Dictionary& dictionary, uint8_t node_id, Events events);
 

@@ -7,12 +7,14 @@ void NodeIdConflict::booted(uint8_t node_id, uint64_t now_us) {
   booted_us_ = now_us;
 }
 
-std::optional<NodeIdConflict::Finding> NodeIdConflict::on_frame(const od::CanFrame& frame, uint32_t emcy_cob_id,
+std::optional<NodeIdConflict::Finding> NodeIdConflict::on_frame(const od::CanFrame& frame,
+                                                                uint32_t emcy_cob_id,
                                                                 uint64_t now_us) const {
   if (node_id_ == 0 || frame.rtr) return std::nullopt;
   const bool heartbeat = frame.id == od::cob::kHeartbeat + node_id_ && frame.dlc == 1;
   const bool sdo_answer = frame.id == od::cob::kSdoTx + node_id_ && frame.dlc == 8;
-  const bool emcy = !(emcy_cob_id & 0x80000000u) && frame.id == (emcy_cob_id & 0x7FF) && frame.dlc == 8;
+  const bool emcy =
+      !(emcy_cob_id & 0x80000000u) && frame.id == (emcy_cob_id & 0x7FF) && frame.dlc == 8;
   if (!heartbeat && !sdo_answer && !emcy) return std::nullopt;
   Finding f;
   f.cob_id = frame.id;

@@ -31,7 +31,8 @@ class NodeIdConflict {
   // This node sent its boot-up: the claim period starts.
   void booted(uint8_t node_id, uint64_t now_us);
   // A frame from the bus; `emcy_cob_id` is 0x1014 as it is now.
-  std::optional<Finding> on_frame(const od::CanFrame& frame, uint32_t emcy_cob_id, uint64_t now_us) const;
+  std::optional<Finding> on_frame(const od::CanFrame& frame, uint32_t emcy_cob_id,
+                                  uint64_t now_us) const;
 
  private:
   uint8_t node_id_ = 0;  // 0: not booted

@@ -77,9 +77,10 @@ ParameterStore::Contents ParameterStore::read_file() const {
     const size_t last = body.rfind(kCrcPrefix);
     const size_t digits = last + kCrcPrefix.size();
     uint32_t stored = 0;
-    const bool crc_line = last != std::string_view::npos && digits + 9 == text.size() && text.back() == '\n' &&
-                          std::from_chars(text.data() + digits, text.data() + digits + 8, stored, 16).ptr ==
-                              text.data() + digits + 8;
+    const bool crc_line =
+        last != std::string_view::npos && digits + 9 == text.size() && text.back() == '\n' &&
+        std::from_chars(text.data() + digits, text.data() + digits + 8, stored, 16).ptr ==
+            text.data() + digits + 8;
     if (!header_line(kHeader) || !crc_line || crc32(body.substr(0, last)) != stored) {
       out.damaged = true;
       return out;
@@ -118,7 +119,8 @@ std::optional<std::filesystem::path> ParameterStore::set_aside() const {
     spdlog::error("cannot set aside {}: {}", file_.string(), ec.message());
     return std::nullopt;
   }
-  spdlog::error("cannot set aside {}: {}.corrupt-1..1000 all exist", file_.string(), file_.string());
+  spdlog::error("cannot set aside {}: {}.corrupt-1..1000 all exist", file_.string(),
+                file_.string());
   return std::nullopt;
 }
 
@@ -154,7 +156,8 @@ bool ParameterStore::save(uint16_t first, uint16_t last) {
 
 bool ParameterStore::forget(uint16_t first, uint16_t last) {
   auto values = read_file().values;
-  std::erase_if(values, [&](const auto& kv) { return kv.first.first >= first && kv.first.first <= last; });
+  std::erase_if(values,
+                [&](const auto& kv) { return kv.first.first >= first && kv.first.first <= last; });
   return write_file(values);
 }
 
@@ -166,8 +169,9 @@ ParameterStore::LoadReport ParameterStore::load_into_dictionary(uint16_t first, 
   dictionary_.reset_to_defaults(first, last);
   Contents stored = read_file();
   if (stored.damaged) {
-    spdlog::error("{} is not a valid stepnode parameter file (damaged or foreign): set aside, defaults apply",
-                  file_.string());
+    spdlog::error(
+        "{} is not a valid stepnode parameter file (damaged or foreign): set aside, defaults apply",
+        file_.string());
     report.set_aside = set_aside();
     report.damaged = true;
     return report;

@@ -131,7 +131,8 @@ void PdoEngine::length_error(Rpdo& pdo, uint16_t code, const od::CanFrame& frame
   pdo.length_error = code;
   // Manufacturer bytes: the COB-ID (LE) and the length received.
   emcy_.raise(code, error_bits::kCommunication,
-              {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc}, now_us);
+              {static_cast<uint8_t>(frame.id), static_cast<uint8_t>(frame.id >> 8), frame.dlc},
+              now_us);
 }
 
 void PdoEngine::end_length_error(Rpdo& pdo, uint64_t now_us) {

@@ -16,9 +16,13 @@ bool valid(uint32_t cob_id) { return !(cob_id & od::kCobInvalid); }
 
 // The services that listen to COB-IDs held in the dictionary.
 void add_configured(std::vector<ReceiveFilter>& out, const od::Dictionary& od, unsigned pdo_count) {
-  auto add = [&out](uint32_t cob_id) { out.push_back({cob_id & 0x7FF, ReceiveFilter::Frames::Data}); };
-  add(od.get<uint32_t>(0x1005, 0));  // SYNC: consumed whatever bit 31 says (the producer is not its own consumer)
-  if (const uint32_t time = od.get<uint32_t>(0x1012, 0); time & 0x80000000u) add(time);  // bit 31: consumer
+  auto add = [&out](uint32_t cob_id) {
+    out.push_back({cob_id & 0x7FF, ReceiveFilter::Frames::Data});
+  };
+  add(od.get<uint32_t>(
+      0x1005, 0));  // SYNC: consumed whatever bit 31 says (the producer is not its own consumer)
+  if (const uint32_t time = od.get<uint32_t>(0x1012, 0); time & 0x80000000u)
+    add(time);  // bit 31: consumer
   // EMCY 0x1014: this node's own COB-ID; another device sending on it is a node-ID conflict.
   if (const uint32_t emcy = od.get<uint32_t>(0x1014, 0); valid(emcy)) add(emcy);
   // Heartbeat consumers 0x1016: node-ID in bits 16..23, time in 0..15; 0 of either is unused.
@@ -38,8 +42,10 @@ void add_configured(std::vector<ReceiveFilter>& out, const od::Dictionary& od, u
 
 }  // namespace
 
-std::vector<ReceiveFilter> receive_filters(const od::Dictionary& od, uint8_t node_id, unsigned pdo_count) {
-  std::vector<ReceiveFilter> out{{lss::kMasterToSlave, ReceiveFilter::Frames::Data}, {od::cob::kNmt, ReceiveFilter::Frames::Data}};
+std::vector<ReceiveFilter> receive_filters(const od::Dictionary& od, uint8_t node_id,
+                                           unsigned pdo_count) {
+  std::vector<ReceiveFilter> out{{lss::kMasterToSlave, ReceiveFilter::Frames::Data},
+                                 {od::cob::kNmt, ReceiveFilter::Frames::Data}};
   if (node_id != lss::kUnconfigured) {
     // Node guarding requests (remote) and another device's boot-up or heartbeat (data).
     out.push_back({od::cob::kHeartbeat + node_id, ReceiveFilter::Frames::DataAndRemote});

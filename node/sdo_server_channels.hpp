@@ -10,9 +10,9 @@
 #include <memory>
 #include <vector>
 
+#include "node/deadline.hpp"
 #include "od/can_frame.hpp"
 #include "od/dictionary.hpp"
-#include "node/deadline.hpp"
 #include "od/sdo_server.hpp"
 #include "od/sdo_server_parameter.hpp"
 

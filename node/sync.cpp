@@ -23,7 +23,8 @@ bool SyncService::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
     if (on_bad_length_) on_bad_length_(frame.dlc, now_us);
     return true;
   }
-  on_sync_(overflow ? frame.data[0] : 0, arrival_us && arrival_us <= now_us ? arrival_us : now_us, now_us);
+  on_sync_(overflow ? frame.data[0] : 0, arrival_us && arrival_us <= now_us ? arrival_us : now_us,
+           now_us);
   return true;
 }
 

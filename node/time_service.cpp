@@ -21,9 +21,10 @@ std::optional<TimeOfDay> TimeOfDay::decode(const od::CanFrame& frame) {
 }
 
 od::CanFrame TimeOfDay::encode(uint32_t cob_id) const {
-  return od::CanFrame(cob_id, {static_cast<uint8_t>(ms), static_cast<uint8_t>(ms >> 8),
-                               static_cast<uint8_t>(ms >> 16), static_cast<uint8_t>((ms >> 24) & 0x0F),
-                               static_cast<uint8_t>(days), static_cast<uint8_t>(days >> 8)});
+  return od::CanFrame(cob_id,
+                      {static_cast<uint8_t>(ms), static_cast<uint8_t>(ms >> 8),
+                       static_cast<uint8_t>(ms >> 16), static_cast<uint8_t>((ms >> 24) & 0x0F),
+                       static_cast<uint8_t>(days), static_cast<uint8_t>(days >> 8)});
 }
 
 TimeService::TimeService(od::Dictionary& dictionary, Send send, WallClock wall_clock)
@@ -33,20 +34,29 @@ TimeService::TimeService(od::Dictionary& dictionary, Send send, WallClock wall_c
 
 void TimeService::install_reads() {
   // 0x2F12:1..4 are computed when read: the time runs on between TIME stamps.
-  auto now_of_day = [this] { return TimeOfDay::from_ms_since_1984(network_ms(now_us_).value_or(0)); };
-  dictionary_.at(kNetworkTime, 1).on_read = [now_of_day](od::Bytes& v) { v = od::encode<uint32_t>(now_of_day().ms); };
-  dictionary_.at(kNetworkTime, 2).on_read = [now_of_day](od::Bytes& v) { v = od::encode<uint16_t>(now_of_day().days); };
+  auto now_of_day = [this] {
+    return TimeOfDay::from_ms_since_1984(network_ms(now_us_).value_or(0));
+  };
+  dictionary_.at(kNetworkTime, 1).on_read = [now_of_day](od::Bytes& v) {
+    v = od::encode<uint32_t>(now_of_day().ms);
+  };
+  dictionary_.at(kNetworkTime, 2).on_read = [now_of_day](od::Bytes& v) {
+    v = od::encode<uint16_t>(now_of_day().days);
+  };
   dictionary_.at(kNetworkTime, 3).on_read = [this](od::Bytes& v) {
     auto ms = network_ms(now_us_);
     v = od::encode<uint64_t>(ms ? *ms + TimeOfDay::kUnixMsAt1984 : 0);
   };
-  dictionary_.at(kNetworkTime, 4).on_read = [this](od::Bytes& v) { v = {static_cast<uint8_t>(source_)}; };
+  dictionary_.at(kNetworkTime, 4).on_read = [this](od::Bytes& v) {
+    v = {static_cast<uint8_t>(source_)};
+  };
 }
 
 std::optional<uint64_t> TimeService::network_ms(uint64_t now_us) const {
   if (producer() && wall_clock_) {
     const uint64_t unix_us = wall_clock_();
-    if (unix_us / 1000 >= TimeOfDay::kUnixMsAt1984) return unix_us / 1000 - TimeOfDay::kUnixMsAt1984;
+    if (unix_us / 1000 >= TimeOfDay::kUnixMsAt1984)
+      return unix_us / 1000 - TimeOfDay::kUnixMsAt1984;
   }
   if (source_ == Source::None) return std::nullopt;
   return stamp_ms_ + (now_us - stamp_at_us_) / 1000;
@@ -57,13 +67,15 @@ bool TimeService::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   if (!consumer() || frame.rtr || frame.id != cob_id()) return false;
   auto t = TimeOfDay::decode(frame);
   if (!t) {
-    spdlog::debug("TIME on 0x{:03X} with {} bytes or a time of day out of range: ignored", frame.id, frame.dlc);
+    spdlog::debug("TIME on 0x{:03X} with {} bytes or a time of day out of range: ignored", frame.id,
+                  frame.dlc);
     return true;
   }
   // The stamp was the time when the frame was on the bus: from then on the node's clock runs it.
   stamp_ms_ = t->ms_since_1984();
   stamp_at_us_ = arrival_us && arrival_us <= now_us ? arrival_us : now_us;
-  if (source_ != Source::Consumed) spdlog::info("TIME: network time received (day {} since 1984, {} ms)", t->days, t->ms);
+  if (source_ != Source::Consumed)
+    spdlog::info("TIME: network time received (day {} since 1984, {} ms)", t->days, t->ms);
   source_ = Source::Consumed;
   return true;
 }

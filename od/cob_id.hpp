@@ -10,8 +10,9 @@
 namespace stepnode::od {
 
 constexpr uint32_t kCobInvalid = 0x80000000;  // bit 31: object does not exist / not valid
-constexpr uint32_t kCobGenerate = 0x40000000;  // bit 30: SYNC producer (0x1005), no RTR (TPDO), dynamic (SDO)
-constexpr uint32_t kCobExtended = 0x20000000;  // bit 29: 29-bit ID (not supported)
+constexpr uint32_t kCobGenerate =
+    0x40000000;  // bit 30: SYNC producer (0x1005), no RTR (TPDO), dynamic (SDO)
+constexpr uint32_t kCobExtended = 0x20000000;    // bit 29: 29-bit ID (not supported)
 constexpr uint32_t kCobIdHighBits = 0x1FFFF800;  // bits 11..28: 0 for an 11-bit CAN-ID
 
 // No 29-bit IDs (bit 29, and bits 11..28 are 0 with an 11-bit CAN-ID), no restricted IDs,

@@ -77,9 +77,10 @@ void add_sync_and_emcy(Dictionary& od, const DeviceInfo& info) {
   od.var(0x1006, "Communication cycle period", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
   // CiA 301 7.5.2.8: the window (us) after a SYNC in which synchronous PDOs are sent and
   // accepted; 0 = not used.
-  od.var(kSyncWindowLength, "Synchronous window length", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(0));
-  Entry& overflow = od.var(0x1019, "Synchronous counter overflow value", DT::Unsigned8,
-                           AC::ReadWrite, {0});
+  od.var(kSyncWindowLength, "Synchronous window length", DT::Unsigned32, AC::ReadWrite,
+         encode<uint32_t>(0));
+  Entry& overflow =
+      od.var(0x1019, "Synchronous counter overflow value", DT::Unsigned8, AC::ReadWrite, {0});
   // 0 = no counter, 2..240 = counter range; 1 and 241..255 are reserved. The value may
   // only change while the SYNC cycle period is 0 (CiA 301 7.5.2.22).
   overflow.validate = [&od](std::span<const uint8_t> d) {
@@ -163,8 +164,8 @@ void add_error_behaviour(Dictionary& od) {
   // to the NMT state: 0 pre-operational (if operational), 1 no change, 2 stopped. 3..0x7F
   // are reserved and 0x80..0xFF manufacturer-specific, of which this device defines none.
   Object& behaviour = od.record(kErrorBehaviour, "Error behaviour", ObjectCode::Array);
-  limits<uint8_t>(behaviour.add(kCommunicationErrorSub, "Communication error", DT::Unsigned8, AC::ReadWrite,
-                                {kErrorBehaviourPreOperational}),
+  limits<uint8_t>(behaviour.add(kCommunicationErrorSub, "Communication error", DT::Unsigned8,
+                                AC::ReadWrite, {kErrorBehaviourPreOperational}),
                   kErrorBehaviourPreOperational, kErrorBehaviourStopped);
 }
 
@@ -175,8 +176,8 @@ void add_store_restore(Dictionary& od) {
     // Reading gives the capability: bit 0 = the device saves on command.
     Entry& s = store.add(g.sub, std::string("Save ") + g.name, DT::Unsigned32, AC::ReadWrite,
                          encode<uint32_t>(1));
-    Entry& r = restore.add(g.sub, std::string("Restore ") + g.name, DT::Unsigned32,
-                           AC::ReadWrite, encode<uint32_t>(1));
+    Entry& r = restore.add(g.sub, std::string("Restore ") + g.name, DT::Unsigned32, AC::ReadWrite,
+                           encode<uint32_t>(1));
     s.persistent = r.persistent = false;
     s.on_read = r.on_read = [](Bytes& v) { v = encode<uint32_t>(1); };
     // A wrong signature is refused with 0x08000020 (CiA 301 7.5.2.13).
@@ -202,8 +203,9 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   uint32_t no_rtr = rx ? 0 : kCobGenerate;
   uint32_t cob_id = (n < 4 ? base + node_id : kCobInvalid) | no_rtr;
 
-  Object& comm = od.record(comm_index, hex_index(rx ? "RPDO %u communication parameter"
-                                                    : "TPDO %u communication parameter", n + 1));
+  Object& comm = od.record(
+      comm_index,
+      hex_index(rx ? "RPDO %u communication parameter" : "TPDO %u communication parameter", n + 1));
   Entry& id = comm.add(1, std::string("COB-ID used by ") + kind, DT::Unsigned32, AC::ReadWrite,
                        encode<uint32_t>(cob_id));
   if (n < 4) id.eds_default = hex_index("$NODEID+0x%X", no_rtr | base);
@@ -234,8 +236,8 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
     comm.entries.at(6).validate = only_when_invalid;
   }
 
-  Object& map = od.record(map_index, hex_index(rx ? "RPDO %u mapping parameter"
-                                                  : "TPDO %u mapping parameter", n + 1));
+  Object& map = od.record(
+      map_index, hex_index(rx ? "RPDO %u mapping parameter" : "TPDO %u mapping parameter", n + 1));
   Entry& count = map.entries.at(0);
   count.name = "Number of mapped objects";
   count.access = AC::ReadWrite;

@@ -15,7 +15,7 @@ struct DeviceInfo {
   std::string device_name = "stepnode";
   std::string hardware_version = "simulated machine";
   std::string software_version = "0.1.0";
-  uint32_t vendor_id = 0;  // no CiA-assigned vendor ID
+  uint32_t vendor_id = 0;              // no CiA-assigned vendor ID
   uint32_t product_code = 0x53544550;  // "STEP"
   uint32_t revision = 0x00010000;      // major 1, minor 0
   uint32_t serial_number = 0;
@@ -31,7 +31,8 @@ constexpr unsigned kErrorHistoryLength = 8;
 // 0x1029 error behaviour (CiA 301 7.5.2.32), sub 1: the communication error class.
 constexpr uint16_t kErrorBehaviour = 0x1029;
 constexpr uint8_t kCommunicationErrorSub = 1;
-constexpr uint8_t kErrorBehaviourPreOperational = 0, kErrorBehaviourNoChange = 1, kErrorBehaviourStopped = 2;
+constexpr uint8_t kErrorBehaviourPreOperational = 0, kErrorBehaviourNoChange = 1,
+                  kErrorBehaviourStopped = 2;
 // RPDOs and TPDOs a device may have (CiA 301: 0x1400-0x15FF / 0x1800-0x19FF).
 constexpr unsigned kMaxPdos = 512;
 

@@ -45,14 +45,13 @@ size_t fixed_size(DataType type) {
 bool is_variable_length(DataType type) { return fixed_size(type) == 0; }
 
 bool is_signed_integer(DataType type) {
-  return type == DataType::Integer8 || type == DataType::Integer16 ||
-         type == DataType::Integer32 || type == DataType::Integer64;
+  return type == DataType::Integer8 || type == DataType::Integer16 || type == DataType::Integer32 ||
+         type == DataType::Integer64;
 }
 
 bool is_unsigned_integer(DataType type) {
-  return type == DataType::Boolean || type == DataType::Unsigned8 ||
-         type == DataType::Unsigned16 || type == DataType::Unsigned32 ||
-         type == DataType::Unsigned64;
+  return type == DataType::Boolean || type == DataType::Unsigned8 || type == DataType::Unsigned16 ||
+         type == DataType::Unsigned32 || type == DataType::Unsigned64;
 }
 
 bool is_real(DataType type) { return type == DataType::Real32 || type == DataType::Real64; }

@@ -142,7 +142,9 @@ void listen(Entry& entry, std::function<void()> listener) {
   });
 }
 
-void react(Entry& entry, std::function<SdoAbort()> reaction) { entry.reactions.push_back(std::move(reaction)); }
+void react(Entry& entry, std::function<SdoAbort()> reaction) {
+  entry.reactions.push_back(std::move(reaction));
+}
 
 SdoAbort run_reactions(Entry& entry, const Bytes& previous) {
   for (const auto& reaction : entry.reactions) {

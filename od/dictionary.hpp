@@ -35,7 +35,7 @@ struct Entry {
   bool pdo_sampled = false;
   bool persistent = false;  // saved by 0x1010, brought back by 0x1011 / restart
   Bytes default_value;
-  std::string eds_default;  // EDS DefaultValue when it is an expression ("$NODEID+0x180")
+  std::string eds_default;         // EDS DefaultValue when it is an expression ("$NODEID+0x180")
   std::optional<Bytes> low, high;  // inclusive limits, in the entry's type
   size_t max_length = 0;           // strings and domains: largest accepted length
   Bytes value;

@@ -18,7 +18,7 @@ std::string write_eds(const Dictionary& od, const DeviceInfo& info);
 struct EdsEntry {
   uint16_t index = 0;
   uint8_t sub = 0;
-  std::string name;        // "Object name" or "Object name / sub name"
+  std::string name;  // "Object name" or "Object name / sub name"
   DataType type = DataType::Unsigned8;
   Access access = Access::ReadOnly;
   bool pdo_mappable = false;

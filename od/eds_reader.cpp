@@ -70,9 +70,11 @@ const EdsEntry* EdsFile::find(uint16_t index, uint8_t sub) const {
   return it == entries.end() ? nullptr : &it->second;
 }
 
-EdsFile parse_eds(std::string_view text) {
-  EdsFile eds;
-  Lines lines;
+namespace {
+
+// The sections and their key=value lines (keys lower-cased), with the line of each for
+// the messages.
+void read_sections(std::string_view text, EdsFile& eds, Lines& lines) {
   std::string current;
   size_t line_no = 0;
   while (!text.empty()) {
@@ -97,6 +99,14 @@ EdsFile parse_eds(std::string_view text) {
     eds.sections[current][k] = trim(line.substr(eq + 1));
     lines.key[{current, k}] = line_no;
   }
+}
+
+}  // namespace
+
+EdsFile parse_eds(std::string_view text) {
+  EdsFile eds;
+  Lines lines;
+  read_sections(text, eds, lines);
 
   auto is_hex = [](const std::string& s) {
     return !s.empty() &&
@@ -121,8 +131,9 @@ EdsFile parse_eds(std::string_view text) {
       // An ARRAY/RECORD header (it may carry a DataType when its sub-entries are compact).
       auto code = values.find("objecttype");
       unsigned long object_type =
-          code == values.end() ? 0x7 : number(code->second, lines.of(name, "objecttype"),
-                                             "[" + name + "] ObjectType");
+          code == values.end()
+              ? 0x7
+              : number(code->second, lines.of(name, "objecttype"), "[" + name + "] ObjectType");
       if (object_type == 0x8 || object_type == 0x9) continue;
       if (object_type != 0x7 && object_type != 0x2) continue;  // DEFTYPE, DEFSTRUCT, NULL
     }
@@ -136,14 +147,16 @@ EdsFile parse_eds(std::string_view text) {
       if (parent != eds.sections.end() && parent->second.contains("parametername"))
         e.name = parent->second.at("parametername") + " / " + e.name;
     }
-    unsigned long type = number(type_it->second, lines.of(name, "datatype"), "[" + name + "] DataType");
+    unsigned long type =
+        number(type_it->second, lines.of(name, "datatype"), "[" + name + "] DataType");
     if (type > 0xFFFF) fail(lines.of(name, "datatype"), "[" + name + "] DataType is not 16-bit");
     e.type = static_cast<DataType>(type);
     e.access = parse_access(key(values, "AccessType", name, lines), lines.of(name, "accesstype"),
                             "[" + name + "]");
     auto pdo = values.find("pdomapping");
     if (pdo != values.end())
-      e.pdo_mappable = number(pdo->second, lines.of(name, "pdomapping"), "[" + name + "] PDOMapping") != 0;
+      e.pdo_mappable =
+          number(pdo->second, lines.of(name, "pdomapping"), "[" + name + "] PDOMapping") != 0;
     auto def = values.find("defaultvalue");
     if (def != values.end()) e.default_value = def->second;
     eds.entries[{e.index, e.sub}] = e;

@@ -39,7 +39,8 @@ void write_entry(std::ostream& out, const std::string& section, const Entry& e) 
   out << "ObjectType=0x7\n";
   out << "DataType=" << hex(static_cast<unsigned>(e.type), 4) << "\n";
   out << "AccessType=" << access_eds_name(e.access) << "\n";
-  if (e.type != DataType::Domain) out << "DefaultValue="
+  if (e.type != DataType::Domain)
+    out << "DefaultValue="
         << (e.eds_default.empty() ? eds_value(e.type, e.default_value) : e.eds_default) << "\n";
   if (e.low) out << "LowLimit=" << eds_value(e.type, *e.low) << "\n";
   if (e.high) out << "HighLimit=" << eds_value(e.type, *e.high) << "\n";

@@ -53,7 +53,7 @@ std::string emcy_code_text(uint16_t code) {
 
 std::string error_register_text(uint8_t reg) {
   if (reg == 0) return "no error";
-  static const char* bits[8] = {"generic", "current", "voltage", "temperature",
+  static const char* bits[8] = {"generic",       "current",        "voltage",  "temperature",
                                 "communication", "device profile", "reserved", "manufacturer"};
   std::string out;
   for (int i = 0; i < 8; ++i) {

@@ -14,7 +14,8 @@ SdoAbort check_mapping_entry(const Dictionary& dictionary, uint32_t word, PdoDir
   }
   const Entry* e = dictionary.find(m.index, m.sub);
   if (!e) return dictionary.object(m.index) ? SdoAbort::NoSubindex : SdoAbort::NoObject;
-  bool direction_ok = direction == PdoDirection::Receive ? writable(e->access) : readable(e->access);
+  bool direction_ok =
+      direction == PdoDirection::Receive ? writable(e->access) : readable(e->access);
   if (!e->pdo_mappable || !direction_ok || is_variable_length(e->type))
     return SdoAbort::NotMappable;
   if (m.bits != e->bit_length()) return SdoAbort::ParameterIncompatible;
@@ -111,7 +112,8 @@ SdoAbort unpack_pdo(Dictionary& dictionary, const PdoMapping& mapping,
   return first;
 }
 
-void set_default_mapping(Dictionary& dictionary, uint16_t map_index, std::initializer_list<uint32_t> words) {
+void set_default_mapping(Dictionary& dictionary, uint16_t map_index,
+                         std::initializer_list<uint32_t> words) {
   uint8_t n = 0;
   for (uint32_t w : words) {
     Entry& e = dictionary.at(map_index, ++n);

@@ -55,7 +55,8 @@ constexpr uint32_t mapping_word(uint16_t index, uint8_t sub, uint8_t bits) {
 // Makes `words` the default (and present) mapping of the record `map_index`
 // (rpdo_mapping(n) or tpdo_mapping(n)), with sub 0 their count: a profile's default PDOs,
 // the one place they are built.
-void set_default_mapping(Dictionary& dictionary, uint16_t map_index, std::initializer_list<uint32_t> words);
+void set_default_mapping(Dictionary& dictionary, uint16_t map_index,
+                         std::initializer_list<uint32_t> words);
 
 size_t mapping_bits(const PdoMapping& mapping);
 inline size_t mapping_bytes(const PdoMapping& mapping) { return (mapping_bits(mapping) + 7) / 8; }

@@ -18,7 +18,8 @@ std::string_view abort_text(uint32_t code) {
     case 0x06010002: return "Attempt to write a read only object";
     case 0x06020000: return "Object does not exist in the object dictionary";
     case 0x06040041: return "Object cannot be mapped to the PDO";
-    case 0x06040042: return "The number and length of the objects to be mapped would exceed PDO length";
+    case 0x06040042:
+      return "The number and length of the objects to be mapped would exceed PDO length";
     case 0x06040043: return "General parameter incompatibility reason";
     case 0x06040047: return "General internal incompatibility in the device";
     case 0x06060000: return "Access failed due to a hardware error";
@@ -33,9 +34,13 @@ std::string_view abort_text(uint32_t code) {
     case 0x060A0023: return "Resource not available: SDO connection";
     case 0x08000000: return "General error";
     case 0x08000020: return "Data cannot be transferred or stored to the application";
-    case 0x08000021: return "Data cannot be transferred or stored to the application because of local control";
-    case 0x08000022: return "Data cannot be transferred or stored to the application because of the present device state";
-    case 0x08000023: return "Object dictionary dynamic generation fails or no object dictionary is present";
+    case 0x08000021:
+      return "Data cannot be transferred or stored to the application because of local control";
+    case 0x08000022:
+      return "Data cannot be transferred or stored to the application because of the present "
+             "device state";
+    case 0x08000023:
+      return "Object dictionary dynamic generation fails or no object dictionary is present";
     case 0x08000024: return "No data available";
     default: return "unknown abort code";
   }

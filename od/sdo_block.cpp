@@ -44,8 +44,7 @@ uint8_t BlockSender::end_n() const {
 
 uint16_t BlockSender::crc() const { return crc16_ccitt(data_); }
 
-void BlockReceiver::start(uint8_t blksize, size_t limit, SdoAbort overflow_abort,
-                          uint64_t now_us) {
+void BlockReceiver::start(uint8_t blksize, size_t limit, SdoAbort overflow_abort, uint64_t now_us) {
   *this = BlockReceiver{};
   blksize_ = blksize;
   // Whole segments: the last one is padded up to 7 bytes until the end phase trims it.

@@ -57,8 +57,7 @@ class BlockReceiver {
                       std::vector<CanFrame>& out);
   // Sub-block timer: segments came since the last ack but the sub-block stalled (its
   // first or last segment lost) for `stall_us`; ack what arrived so the sender repeats.
-  void on_tick(uint64_t now_us, uint64_t stall_us, uint32_t ack_cob_id,
-               std::vector<CanFrame>& out);
+  void on_tick(uint64_t now_us, uint64_t stall_us, uint32_t ack_cob_id, std::vector<CanFrame>& out);
   // The segment with the c bit arrived and was acknowledged: the end phase follows.
   bool finished() const { return finished_; }
   // End phase: drops the n padding bytes of the last segment. False if n is impossible.

@@ -132,8 +132,8 @@ void SdoClient::start_upload(uint16_t index, uint8_t sub, Mode mode, uint64_t no
   s.send(cmd_byte(ccs::kUploadInitiate), 0, out);
 }
 
-void SdoClient::start_download(uint16_t index, uint8_t sub, Bytes data, Mode mode,
-                               uint64_t now_us, std::vector<CanFrame>& out) {
+void SdoClient::start_download(uint16_t index, uint8_t sub, Bytes data, Mode mode, uint64_t now_us,
+                               std::vector<CanFrame>& out) {
   State& s = *state_;
   s.begin(index, sub, now_us, out);
   const auto size = static_cast<uint32_t>(data.size());
@@ -286,10 +286,9 @@ void SdoClient::State::send_download_segment(std::vector<CanFrame>& out) {
   t.phase = Phase::DownloadSegment;
   const size_t count = std::min(kSegmentBytes, t.data.size() - t.offset);
   t.sent_last = t.offset + count == t.data.size();
-  const auto byte0 = static_cast<uint8_t>(cmd_byte(ccs::kDownloadSegment) |
-                                          (t.toggle ? kToggle : 0) |
-                                          ((kSegmentBytes - count) << 1) |
-                                          (t.sent_last ? kLastSegment : 0));
+  const auto byte0 =
+      static_cast<uint8_t>(cmd_byte(ccs::kDownloadSegment) | (t.toggle ? kToggle : 0) |
+                           ((kSegmentBytes - count) << 1) | (t.sent_last ? kLastSegment : 0));
   out.push_back(raw_frame(client.request_cob_id_, byte0, t.data.data() + t.offset, count));
   t.offset += count;
 }
@@ -333,13 +332,12 @@ void SdoClient::State::request_segment(std::vector<CanFrame>& out) const {
 
 // 7.2.4.3.10: repeat from the server's ackseq, or end (7.2.4.3.11) with n and the CRC.
 void SdoClient::State::block_download_ack(const CanFrame& f, std::vector<CanFrame>& out) {
-  if (SdoAbort a = t.sender.on_ack(f.data[1], f.data[2]); a != SdoAbort::None)
-    return fail(a, out);
+  if (SdoAbort a = t.sender.on_ack(f.data[1], f.data[2]); a != SdoAbort::None) return fail(a, out);
   if (!t.sender.complete()) return t.sender.send_sub_block(client.request_cob_id_, out);
   uint8_t crc[2];
   put_u16(crc, t.sender.crc());
-  const auto byte0 = static_cast<uint8_t>(cmd_byte(ccs::kBlockDownload) |
-                                          (t.sender.end_n() << 2) | kBlockEnd);
+  const auto byte0 =
+      static_cast<uint8_t>(cmd_byte(ccs::kBlockDownload) | (t.sender.end_n() << 2) | kBlockEnd);
   out.push_back(raw_frame(client.request_cob_id_, byte0, crc, 2));
   t.phase = Phase::BlockDownloadEnd;
 }
@@ -356,8 +354,8 @@ void SdoClient::State::block_upload_initiate_response(const CanFrame& f, uint64_
   t.receiver.start(blksize, t.size_indicated ? t.size : kMaxTransferBytes,
                    t.size_indicated ? SdoAbort::LengthMismatch : SdoAbort::OutOfMemory, now_us);
   t.phase = Phase::BlockUploadSub;
-  out.push_back(raw_frame(client.request_cob_id_, cmd_byte(ccs::kBlockUpload) | kBlockStart,
-                          nullptr, 0));
+  out.push_back(
+      raw_frame(client.request_cob_id_, cmd_byte(ccs::kBlockUpload) | kBlockStart, nullptr, 0));
 }
 
 // 7.2.4.3.15: n unused bytes in the last segment, the server's CRC over all data.
@@ -366,8 +364,8 @@ void SdoClient::State::block_upload_end(const CanFrame& f, std::vector<CanFrame>
   Bytes& data = t.receiver.data();
   if (t.size_indicated && data.size() != t.size) return fail(SdoAbort::LengthMismatch, out);
   if (t.crc && crc16_ccitt(data) != get_u16(&f.data[1])) return fail(SdoAbort::CrcError, out);
-  out.push_back(raw_frame(client.request_cob_id_, cmd_byte(ccs::kBlockUpload) | kBlockEnd,
-                          nullptr, 0));
+  out.push_back(
+      raw_frame(client.request_cob_id_, cmd_byte(ccs::kBlockUpload) | kBlockEnd, nullptr, 0));
   finish(std::move(data));
 }
 

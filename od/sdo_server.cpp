@@ -50,14 +50,14 @@ struct Transfer {
   uint16_t index = 0;
   uint8_t sub = 0;
   uint64_t last_rx_us = 0;
-  bool toggle = false;          // segmented: toggle bit the next request must carry
-  bool size_indicated = false;  // download: the client gave the size ...
-  size_t size = 0;              // ... this one
-  size_t limit = 0;             // download: most bytes accepted
+  bool toggle = false;                          // segmented: toggle bit the next request must carry
+  bool size_indicated = false;                  // download: the client gave the size ...
+  size_t size = 0;                              // ... this one
+  size_t limit = 0;                             // download: most bytes accepted
   SdoAbort overflow = SdoAbort::LengthTooHigh;  // ... and the abort past it
-  bool crc = false;             // block download: the client computes the CRC (cc)
-  Bytes data;                   // download: received so far; upload: the value read
-  size_t offset = 0;            // segmented upload: bytes sent
+  bool crc = false;                             // block download: the client computes the CRC (cc)
+  Bytes data;                                   // download: received so far; upload: the value read
+  size_t offset = 0;                            // segmented upload: bytes sent
   BlockSender sender;
   BlockReceiver receiver;
 };
@@ -85,8 +85,7 @@ struct SdoServer::State {
   void upload_initiate(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out);
   void answer_upload(Bytes data, std::vector<CanFrame>& out);
   void upload_segment(const CanFrame& req, std::vector<CanFrame>& out);
-  void block_download_initiate(const CanFrame& req, uint64_t now_us,
-                               std::vector<CanFrame>& out);
+  void block_download_initiate(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out);
   void block_download_segment(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out);
   void block_download_end(const CanFrame& req, std::vector<CanFrame>& out);
   void block_upload_initiate(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out);
@@ -181,10 +180,13 @@ void SdoServer::State::reject(const CanFrame& req, SdoAbort code, std::vector<Ca
   if (t.phase == Phase::Idle) {
     const uint8_t b0 = req.dlc >= 1 ? req.data[0] : 0;
     const uint8_t cs = command(b0);
-    const bool multiplexed = req.dlc >= 1 && (cs == ccs::kDownloadInitiate || cs == ccs::kUploadInitiate ||
-                                              (cs == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate) ||
-                                              (cs == ccs::kBlockUpload && block_sub(b0) == kBlockInitiate));
-    t.index = multiplexed ? static_cast<uint16_t>((req.dlc > 1 ? req.data[1] : 0) | (req.dlc > 2 ? req.data[2] << 8 : 0)) : 0;
+    const bool multiplexed =
+        req.dlc >= 1 && (cs == ccs::kDownloadInitiate || cs == ccs::kUploadInitiate ||
+                         (cs == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate) ||
+                         (cs == ccs::kBlockUpload && block_sub(b0) == kBlockInitiate));
+    t.index = multiplexed ? static_cast<uint16_t>((req.dlc > 1 ? req.data[1] : 0) |
+                                                  (req.dlc > 2 ? req.data[2] << 8 : 0))
+                          : 0;
     t.sub = multiplexed && req.dlc > 3 ? req.data[3] : 0;
   }
   fail(code, out);
@@ -199,8 +201,8 @@ void SdoServer::State::respond(uint8_t byte0, uint32_t value, std::vector<CanFra
 SdoAbort SdoServer::State::accept_size(const Entry& entry, bool indicated, uint32_t size) {
   const size_t fixed = fixed_size(entry.type);
   const size_t capacity = fixed ? fixed : entry.max_length ? entry.max_length : kMaxTransferBytes;
-  const SdoAbort too_big = (fixed || entry.max_length) ? SdoAbort::LengthTooHigh
-                                                       : SdoAbort::OutOfMemory;
+  const SdoAbort too_big =
+      (fixed || entry.max_length) ? SdoAbort::LengthTooHigh : SdoAbort::OutOfMemory;
   t.size_indicated = indicated;
   t.size = size;
   if (!indicated) {
@@ -276,8 +278,8 @@ void SdoServer::State::answer_upload(Bytes data, std::vector<CanFrame>& out) {
   const uint8_t cmd = cmd_byte(scs::kUploadInitiate);
   if (!data.empty() && data.size() <= 4) {
     const uint8_t n = static_cast<uint8_t>(4 - data.size());
-    CanFrame f = frame(server.tx_cob_id_, cmd | (n << 2) | kExpedited | kSizeIndicated, t.index,
-                       t.sub);
+    CanFrame f =
+        frame(server.tx_cob_id_, cmd | (n << 2) | kExpedited | kSizeIndicated, t.index, t.sub);
     std::copy(data.begin(), data.end(), f.data.begin() + 4);
     out.push_back(f);
     return end();
@@ -293,9 +295,9 @@ void SdoServer::State::upload_segment(const CanFrame& req, std::vector<CanFrame>
   if (((b0 & kToggle) != 0) != t.toggle) return fail(SdoAbort::ToggleBit, out);
   const size_t count = std::min(kSegmentBytes, t.data.size() - t.offset);
   const bool last = t.offset + count == t.data.size();
-  const uint8_t answer = static_cast<uint8_t>(cmd_byte(scs::kUploadSegment) | (b0 & kToggle) |
-                                              ((kSegmentBytes - count) << 1) |
-                                              (last ? kLastSegment : 0));
+  const uint8_t answer =
+      static_cast<uint8_t>(cmd_byte(scs::kUploadSegment) | (b0 & kToggle) |
+                           ((kSegmentBytes - count) << 1) | (last ? kLastSegment : 0));
   out.push_back(raw_frame(server.tx_cob_id_, answer, t.data.data() + t.offset, count));
   t.offset += count;
   t.toggle = !t.toggle;
@@ -310,8 +312,7 @@ void SdoServer::State::block_download_initiate(const CanFrame& req, uint64_t now
   if (SdoAbort a = dict.check_write_access(t.index, t.sub); a != SdoAbort::None)
     return fail(a, out);
   const uint8_t b0 = req.data[0];
-  if (SdoAbort a = accept_size(*dict.find(t.index, t.sub), b0 & kBlockSize,
-                               get_u32(&req.data[4]));
+  if (SdoAbort a = accept_size(*dict.find(t.index, t.sub), b0 & kBlockSize, get_u32(&req.data[4]));
       a != SdoAbort::None)
     return fail(a, out);
   t.crc = (b0 & kBlockCrc) != 0;
@@ -338,7 +339,8 @@ void SdoServer::State::block_download_end(const CanFrame& req, std::vector<CanFr
   if (SdoAbort a = server.dictionary_.write(t.index, t.sub, data, WriteOrigin::Sdo);
       a != SdoAbort::None)
     return fail(a, out);
-  out.push_back(raw_frame(server.tx_cob_id_, cmd_byte(scs::kBlockDownload) | kBlockEnd, nullptr, 0));
+  out.push_back(
+      raw_frame(server.tx_cob_id_, cmd_byte(scs::kBlockDownload) | kBlockEnd, nullptr, 0));
   end();
 }
 

@@ -12,10 +12,12 @@ constexpr uint8_t kMaxClientNodeId = 127;
 
 void add_default_channel(Dictionary& od, uint8_t node_id) {
   Object& sdo = od.record(kSdoServerParameter, "SDO server parameter");
-  Entry& rx = sdo.add(sdo_param::kCobIdClientToServer, "COB-ID client to server",
-                      DataType::Unsigned32, Access::ReadOnly, encode<uint32_t>(cob::kSdoRx + node_id));
-  Entry& tx = sdo.add(sdo_param::kCobIdServerToClient, "COB-ID server to client",
-                      DataType::Unsigned32, Access::ReadOnly, encode<uint32_t>(cob::kSdoTx + node_id));
+  Entry& rx =
+      sdo.add(sdo_param::kCobIdClientToServer, "COB-ID client to server", DataType::Unsigned32,
+              Access::ReadOnly, encode<uint32_t>(cob::kSdoRx + node_id));
+  Entry& tx =
+      sdo.add(sdo_param::kCobIdServerToClient, "COB-ID server to client", DataType::Unsigned32,
+              Access::ReadOnly, encode<uint32_t>(cob::kSdoTx + node_id));
   rx.eds_default = "$NODEID+0x600";
   tx.eds_default = "$NODEID+0x580";
 }
@@ -23,7 +25,8 @@ void add_default_channel(Dictionary& od, uint8_t node_id) {
 // CiA 301 7.5.2.33: bit 31 valid, bit 30 dynamic (allowed, no meaning to the server),
 // bit 29 frame (11-bit only here); the CAN-ID may change only while bit 31 is set.
 void add_cob_id(Object& sdo, uint8_t sub, const char* name) {
-  Entry& e = sdo.add(sub, name, DataType::Unsigned32, Access::ReadWrite, encode<uint32_t>(kCobInvalid));
+  Entry& e =
+      sdo.add(sub, name, DataType::Unsigned32, Access::ReadWrite, encode<uint32_t>(kCobInvalid));
   e.validate = [&e](std::span<const uint8_t> d) {
     return check_cob_id(decode<uint32_t>(e.value), decode<uint32_t>(d), kCobInvalid);
   };
@@ -44,7 +47,8 @@ void add_extra_channel(Dictionary& od, unsigned channel) {
 
 void add_sdo_server_parameters(Dictionary& od, uint8_t node_id) {
   add_default_channel(od, node_id);
-  for (unsigned channel = 1; channel < kSdoServerChannels; ++channel) add_extra_channel(od, channel);
+  for (unsigned channel = 1; channel < kSdoServerChannels; ++channel)
+    add_extra_channel(od, channel);
 }
 
 SdoChannelIds sdo_channel_ids(const Dictionary& od, unsigned channel) {

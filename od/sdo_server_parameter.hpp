@@ -24,8 +24,8 @@ void add_sdo_server_parameters(Dictionary& od, uint8_t node_id);
 
 // One channel's COB-IDs as the dictionary holds them now.
 struct SdoChannelIds {
-  uint32_t rx = 0;  // client -> server CAN-ID (11 bit)
-  uint32_t tx = 0;  // server -> client CAN-ID
+  uint32_t rx = 0;     // client -> server CAN-ID (11 bit)
+  uint32_t tx = 0;     // server -> client CAN-ID
   bool valid = false;  // both COB-IDs valid (bit 31 clear)
 };
 SdoChannelIds sdo_channel_ids(const Dictionary& od, unsigned channel);

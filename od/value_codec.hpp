@@ -41,7 +41,8 @@ T decode(std::span<const uint8_t> bytes) {
   } else {
     using U = std::make_unsigned_t<T>;
     U u = 0;
-    for (size_t i = 0; i < sizeof(T) && i < bytes.size(); ++i) u |= static_cast<U>(bytes[i]) << (8 * i);
+    for (size_t i = 0; i < sizeof(T) && i < bytes.size(); ++i)
+      u |= static_cast<U>(bytes[i]) << (8 * i);
     return static_cast<T>(u);
   }
 }

@@ -11,13 +11,13 @@
 //   latency CAN receive timestamp -> sample at this subscriber (median, p99),
 //   latency publish timestamp -> sample (Fast DDS alone, the same samples), median, p99,
 //   the bridge's CPU share (utime+stime over wall time) and resident memory (VmRSS).
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -93,7 +93,8 @@ ProcStat proc_stat(int pid) {
     while (rest >> field) fields.push_back(field);
     // fields[0] is state (stat field 3): utime is field 14, stime 15 -> index 11, 12.
     if (fields.size() > 12)
-      out.cpu_s = (std::stod(fields[11]) + std::stod(fields[12])) / static_cast<double>(sysconf(_SC_CLK_TCK));
+      out.cpu_s = (std::stod(fields[11]) + std::stod(fields[12])) /
+                  static_cast<double>(sysconf(_SC_CLK_TCK));
   }
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
   std::string line;
@@ -105,7 +106,8 @@ ProcStat proc_stat(int pid) {
 double percentile_us(std::vector<int64_t> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  size_t i = std::min(v.size() - 1, static_cast<size_t>(std::llround(p * static_cast<double>(v.size() - 1))));
+  size_t i = std::min(v.size() - 1,
+                      static_cast<size_t>(std::llround(p * static_cast<double>(v.size() - 1))));
   return static_cast<double>(v[i]) / 1000.0;
 }
 
@@ -122,7 +124,8 @@ struct Options {
 efd::DataReader* subscribe(efd::DomainParticipant* participant, PositionListener& listener) {
   bridge::dds::Naming naming;
   std::string type = bridge::dds::type_name(bridge::dds::TopicKind::AxisPosition, naming);
-  bridge::dds::make_type_support(bridge::dds::TopicKind::AxisPosition, naming).register_type(participant, type);
+  bridge::dds::make_type_support(bridge::dds::TopicKind::AxisPosition, naming)
+      .register_type(participant, type);
   auto* topic = participant->create_topic("AxisPosition", type, efd::TOPIC_QOS_DEFAULT);
   auto* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
   auto qos = bridge::dds::builtin_reader_qos(bridge::dds::TopicKind::AxisPosition, false, 100000);
@@ -149,7 +152,8 @@ int64_t send_paced(canio::SocketCan& can, int node, int rate, double seconds, in
     auto due = std::min<int64_t>(total, static_cast<int64_t>(elapsed * rate) + 1);
     for (; sent < due; ++sent, ++seq) {
       uint8_t d[8] = {};
-      for (int b = 0; b < 4; ++b) d[b] = static_cast<uint8_t>(static_cast<uint32_t>(seq) >> (8 * b));
+      for (int b = 0; b < 4; ++b)
+        d[b] = static_cast<uint8_t>(static_cast<uint32_t>(seq) >> (8 * b));
       can.send(od::CanFrame(0x280 + static_cast<uint32_t>(node), std::span<const uint8_t>(d, 8)));
     }
     can.flush();
@@ -163,7 +167,8 @@ int64_t send_paced(canio::SocketCan& can, int node, int rate, double seconds, in
 }
 
 // One rate: sends, collects what arrived, prints the row.
-void run_rate(const Options& o, int rate, canio::SocketCan& can, PositionListener& listener, int32_t& seq) {
+void run_rate(const Options& o, int rate, canio::SocketCan& can, PositionListener& listener,
+              int32_t& seq) {
   listener.drain();
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   listener.drain();
@@ -184,9 +189,11 @@ void run_rate(const Options& o, int rate, canio::SocketCan& can, PositionListene
     dds_lat.push_back(r.publish_to_sub_ns);
   }
   std::printf("%9d %9lld %9zu %7lld | %12.1f %12.1f | %12.1f %12.1f | %7.1f %8ld\n", rate,
-              static_cast<long long>(sent), seen.size(), static_cast<long long>(sent) - static_cast<long long>(seen.size()),
-              percentile_us(can_lat, 0.5), percentile_us(can_lat, 0.99), percentile_us(dds_lat, 0.5),
-              percentile_us(dds_lat, 0.99), 100.0 * (after.cpu_s - before.cpu_s) / wall, after.rss_kb);
+              static_cast<long long>(sent), seen.size(),
+              static_cast<long long>(sent) - static_cast<long long>(seen.size()),
+              percentile_us(can_lat, 0.5), percentile_us(can_lat, 0.99),
+              percentile_us(dds_lat, 0.5), percentile_us(dds_lat, 0.99),
+              100.0 * (after.cpu_s - before.cpu_s) / wall, after.rss_kb);
   std::fflush(stdout);
 }
 
@@ -194,8 +201,10 @@ int bench(int argc, char** argv) {
   Options o;
   CLI::App app{"bridge_bench: stepbridge latency, sustained TPDO rate, CPU share and memory"};
   app.add_option("--iface", o.iface, "CAN interface (default vcan0)");
-  app.add_option("--node", o.node, "a running stepnode the bridge has discovered (default 7)")->check(CLI::Range(1, 127));
-  app.add_option("--bridge-pid", o.bridge_pid, "the stepbridge process (for CPU and memory)")->required();
+  app.add_option("--node", o.node, "a running stepnode the bridge has discovered (default 7)")
+      ->check(CLI::Range(1, 127));
+  app.add_option("--bridge-pid", o.bridge_pid, "the stepbridge process (for CPU and memory)")
+      ->required();
   app.add_option("--domain", o.domain, "DDS domain of the bridge (default 0)");
   app.add_option("--rates", o.rates, "TPDO frames per second, one run each")->delimiter(',');
   app.add_option("--seconds", o.seconds, "seconds per rate (default 3)");
@@ -214,13 +223,14 @@ int bench(int argc, char** argv) {
   PositionListener listener;
   auto* reader = subscribe(participant, listener);
   canio::SocketCan can(o.iface);
-  std::printf("bridge_bench --iface %s --node %d --bridge-pid %d --domain %u --seconds %.1f\n", o.iface.c_str(),
-              o.node, o.bridge_pid, o.domain, o.seconds);
-  std::printf("%9s %9s %9s %7s | %12s %12s | %12s %12s | %7s %8s\n", "rate/s", "sent", "received", "lost",
-              "CAN->sub p50", "p99 (us)", "DDS only p50", "p99 (us)", "CPU %", "RSS kB");
+  std::printf("bridge_bench --iface %s --node %d --bridge-pid %d --domain %u --seconds %.1f\n",
+              o.iface.c_str(), o.node, o.bridge_pid, o.domain, o.seconds);
+  std::printf("%9s %9s %9s %7s | %12s %12s | %12s %12s | %7s %8s\n", "rate/s", "sent", "received",
+              "lost", "CAN->sub p50", "p99 (us)", "DDS only p50", "p99 (us)", "CPU %", "RSS kB");
   int32_t seq = 10'000'000;
   for (int rate : o.rates) run_rate(o, rate, can, listener, seq);
-  std::printf("CAN dropped by the kernel (bench socket): %llu\n", static_cast<unsigned long long>(can.dropped()));
+  std::printf("CAN dropped by the kernel (bench socket): %llu\n",
+              static_cast<unsigned long long>(can.dropped()));
   reader->set_listener(nullptr);  // before deleting: the listener must not run during teardown
   bridge::dds::delete_participant(participant);
   return 0;

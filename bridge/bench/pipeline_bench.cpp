@@ -14,9 +14,9 @@
 // requests are answered the same way, inside the bridge thread.
 //
 // A subscriber in a separate process (this program again, --subscriber, started before
-// the runs; bridge/bench/pipeline_subscriber.cpp) reads AxisPosition with a RELIABLE KEEP_ALL reader and measures latency
-// (now - can_time_ns) and loss (sequence numbers that never arrived); it reports over a
-// pipe.
+// the runs; bridge/bench/pipeline_subscriber.cpp) reads AxisPosition with a RELIABLE KEEP_ALL
+// reader and measures latency (now - can_time_ns) and loss (sequence numbers that never arrived);
+// it reports over a pipe.
 //
 // Modes, per rate:
 //   bridged  frame -> queue -> bridge thread -> BusObserver -> DdsPublisher -> subscriber
@@ -26,13 +26,13 @@
 // CPU: the publishing process's CPU time minus the generator thread's (so: bridge thread
 // plus every Fast DDS thread), and the bridge thread alone, over the run's wall time. RSS
 // is the process's VmRSS at the end of the run.
+#include <pthread.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <pthread.h>
-#include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -68,10 +68,12 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+using bench::clock_s;
 using bench::FrameQueue;
 using bench::Item;
 using bench::process_cpu_s;
 using bench::RunRequest;
+using bench::status_kb;
 
 constexpr uint32_t kTpdo2 = 0x280;
 constexpr int32_t kFirstSeq = 1'000'000;  // below: discovery snapshots, never counted
@@ -82,26 +84,11 @@ uint64_t monotonic_us() {
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000u + static_cast<uint64_t>(ts.tv_nsec) / 1000u;
 }
 
-double clock_s(clockid_t clock) {
-  timespec ts{};
-  clock_gettime(clock, &ts);
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-long status_kb(const char* key) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  const size_t n = std::strlen(key);
-  while (std::getline(status, line))
-    if (line.compare(0, n, key) == 0) return std::stol(line.substr(n));
-  return 0;
-}
-
 enum class Mode : int { Bridged, Alone };
 
 // Feeds the observer what a node would answer until it has nothing more to ask.
-void answer_sdo(std::vector<std::unique_ptr<bridge::test::FakeNode>>& nodes, bridge::BusObserver& observer,
-                std::vector<od::CanFrame>& out) {
+void answer_sdo(std::vector<std::unique_ptr<bridge::test::FakeNode>>& nodes,
+                bridge::BusObserver& observer, std::vector<od::CanFrame>& out) {
   while (!out.empty()) {
     std::vector<od::CanFrame> replies, next;
     for (const auto& f : out)
@@ -133,8 +120,9 @@ struct Options {
 // One run's figures, as the table prints them.
 struct Measured {
   int64_t total = 0, lost = 0;
-  double gen_wall = 0, wall = 0;     // s: the generator's run, until the bridge thread caught up
-  double proc_s = 0, bridge_s = 0, gen_s = 0;  // CPU s: process minus generator, bridge thread, generator
+  double gen_wall = 0, wall = 0;  // s: the generator's run, until the bridge thread caught up
+  double proc_s = 0, bridge_s = 0,
+         gen_s = 0;  // CPU s: process minus generator, bridge thread, generator
   long rss_kb = 0;
   size_t backlog = 0;
   uint64_t write_failures = 0;
@@ -145,7 +133,8 @@ struct Measured {
 // nodes it discovered, the bridge thread and the generator thread.
 class Pipeline {
  public:
-  explicit Pipeline(const Options& opt) : opt_(opt), publisher_(publisher_options(opt)), observer_(publisher_, {}) {
+  explicit Pipeline(const Options& opt)
+      : opt_(opt), publisher_(publisher_options(opt)), observer_(publisher_, {}) {
     create_alone_writer();
     discover_nodes();
     bridge_thread_ = std::thread([this] { bridge_loop(); });
@@ -168,11 +157,13 @@ class Pipeline {
     efd::PublicationMatchedStatus alone_matched;
     for (int i = 0; i < 1000; ++i) {
       alone_writer_->get_publication_matched_status(alone_matched);
-      if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) > 0 && alone_matched.current_count > 0)
+      if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) > 0 &&
+          alone_matched.current_count > 0)
         break;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) == 0 || alone_matched.current_count == 0)
+    if (publisher_.matched_readers(bridge::dds::TopicKind::AxisPosition) == 0 ||
+        alone_matched.current_count == 0)
       throw std::runtime_error("the subscriber did not match both writers within 10 s");
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
   }
@@ -189,15 +180,18 @@ class Pipeline {
     next_seq += static_cast<int32_t>(m.total);
     const uint64_t failures_before = publisher_.write_failures() + alone_failures_.load();
     queue_.take_max_backlog();
-    const double cpu0 = process_cpu_s(), gen0 = clock_s(generator_clock_), br0 = clock_s(bridge_clock_);
+    const double cpu0 = process_cpu_s(), gen0 = clock_s(generator_clock_),
+                 br0 = clock_s(bridge_clock_);
     const auto t0 = Clock::now();
     run_.phase.store(1, std::memory_order_release);
-    while (run_.phase.load(std::memory_order_acquire) != 3) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    while (run_.phase.load(std::memory_order_acquire) != 3)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     m.gen_wall = std::chrono::duration<double>(Clock::now() - t0).count();
     while (processed_.load(std::memory_order_acquire) < queue_.pushed())
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     m.wall = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double cpu1 = process_cpu_s(), gen1 = clock_s(generator_clock_), br1 = clock_s(bridge_clock_);
+    const double cpu1 = process_cpu_s(), gen1 = clock_s(generator_clock_),
+                 br1 = clock_s(bridge_clock_);
     m.rss_kb = status_kb("VmRSS:");
     m.backlog = queue_.take_max_backlog();
     run_.phase.store(0);
@@ -227,9 +221,11 @@ class Pipeline {
     alone_po.name = "pipeline_bench alone";
     alone_participant_ = bridge::dds::create_participant(alone_po);
     efd::Topic* alone_topic = bench::register_axis_position(alone_participant_);
-    efd::Publisher* alone_publisher = alone_participant_->create_publisher(efd::PUBLISHER_QOS_DEFAULT);
+    efd::Publisher* alone_publisher =
+        alone_participant_->create_publisher(efd::PUBLISHER_QOS_DEFAULT);
     alone_writer_ = alone_publisher->create_datawriter(
-        alone_topic, bridge::dds::writer_qos(bridge::dds::TopicKind::AxisPosition, false, *alone_publisher));
+        alone_topic,
+        bridge::dds::writer_qos(bridge::dds::TopicKind::AxisPosition, false, *alone_publisher));
     if (!alone_writer_) throw std::runtime_error("alone: Fast DDS refused the writer QoS");
   }
 
@@ -325,7 +321,8 @@ class Pipeline {
       }
       if (phase == 2) {
         const double elapsed = std::chrono::duration<double>(now - start).count();
-        const int64_t due = std::min<int64_t>(run_.total, static_cast<int64_t>(elapsed * run_.rate) + 1);
+        const int64_t due =
+            std::min<int64_t>(run_.total, static_cast<int64_t>(elapsed * run_.rate) + 1);
         append_tpdos(batch, sent, due, seq);
         if (sent == run_.total) run_.phase.store(3, std::memory_order_release);
       }
@@ -365,31 +362,41 @@ class Pipeline {
 };
 
 void print_table_head(const Options& opt) {
-  std::printf("pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d --sub-port-queue %u%s%s\n",
-              opt.domain, opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.sub_port_queue,
-              opt.profiles.empty() ? "" : " --profiles ", opt.profiles.c_str());
-  std::printf("latency = CLOCK_REALTIME at the subscriber's take - can_time_ns (frame queued); CPU = %% of one core\n");
-  std::printf("CPU: proc = publishing process minus the generator thread, thread = the bridge thread, sub = the\n"
-              "subscriber process, gen = the generator thread; us/smp = CPU microseconds per sample; backlog = most\n"
-              "frames waiting for the bridge thread at one wake-up\n");
-  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "rate/s", "mode", "achieved",
-              "sent", "lost", "p50 us", "p99 us", "max us", "proc %", "thread%", "sub %", "gen %", "proc", "sub",
-              "RSS MB", "backlog");
-  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "", "", "", "", "", "", "",
-              "", "", "", "", "", "us/smp", "us/smp", "", "");
+  std::printf(
+      "pipeline_bench --domain %u --seconds %.1f --nodes %d --slice-us %d --reader-depth %d "
+      "--sub-port-queue %u%s%s\n",
+      opt.domain, opt.seconds, opt.nodes, opt.slice_us, opt.reader_depth, opt.sub_port_queue,
+      opt.profiles.empty() ? "" : " --profiles ", opt.profiles.c_str());
+  std::printf(
+      "latency = CLOCK_REALTIME at the subscriber's take - can_time_ns (frame queued); CPU = %% of "
+      "one core\n");
+  std::printf(
+      "CPU: proc = publishing process minus the generator thread, thread = the bridge thread, sub "
+      "= the\n"
+      "subscriber process, gen = the generator thread; us/smp = CPU microseconds per sample; "
+      "backlog = most\n"
+      "frames waiting for the bridge thread at one wake-up\n");
+  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n",
+              "rate/s", "mode", "achieved", "sent", "lost", "p50 us", "p99 us", "max us", "proc %",
+              "thread%", "sub %", "gen %", "proc", "sub", "RSS MB", "backlog");
+  std::printf("%8s %-7s %8s %8s %7s | %9s %9s %9s | %6s %7s %6s %6s | %6s %6s | %6s %7s\n", "", "",
+              "", "", "", "", "", "", "", "", "", "", "us/smp", "us/smp", "", "");
   std::fflush(stdout);
 }
 
 void print_row(int rate, const std::string& mode, const Measured& m) {
   const bench::SubscriberProcess::Result& r = m.sub;
   const auto samples = static_cast<double>(m.total);
-  std::printf("%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %6.1f %7.1f %6.1f %6.1f | %6.2f %6.2f | %6.1f %7zu%s\n",
-              rate, mode.c_str(), samples / m.gen_wall, static_cast<long long>(m.total), static_cast<long long>(m.lost),
-              static_cast<double>(r.p50) / 1e3, static_cast<double>(r.p99) / 1e3, static_cast<double>(r.max) / 1e3,
-              100.0 * m.proc_s / m.wall, 100.0 * m.bridge_s / m.wall, 100.0 * r.cpu_s / m.wall,
-              100.0 * m.gen_s / m.wall, 1e6 * m.proc_s / samples, 1e6 * r.cpu_s / samples,
-              static_cast<double>(m.rss_kb) / 1024.0, m.backlog,
-              m.write_failures ? (" write failures " + std::to_string(m.write_failures)).c_str() : "");
+  std::printf(
+      "%8d %-7s %8.0f %8lld %7lld | %9.1f %9.1f %9.1f | %6.1f %7.1f %6.1f %6.1f | %6.2f %6.2f | "
+      "%6.1f %7zu%s\n",
+      rate, mode.c_str(), samples / m.gen_wall, static_cast<long long>(m.total),
+      static_cast<long long>(m.lost), static_cast<double>(r.p50) / 1e3,
+      static_cast<double>(r.p99) / 1e3, static_cast<double>(r.max) / 1e3, 100.0 * m.proc_s / m.wall,
+      100.0 * m.bridge_s / m.wall, 100.0 * r.cpu_s / m.wall, 100.0 * m.gen_s / m.wall,
+      1e6 * m.proc_s / samples, 1e6 * r.cpu_s / samples, static_cast<double>(m.rss_kb) / 1024.0,
+      m.backlog,
+      m.write_failures ? (" write failures " + std::to_string(m.write_failures)).c_str() : "");
   std::fflush(stdout);
 }
 
@@ -417,8 +424,12 @@ int run_publisher(const Options& opt, const std::string& exe) {
   }
   auto says = [&](const char* m, int v) {
     if (std::find(opt.modes.begin(), opt.modes.end(), m) == opt.modes.end()) return;
-    if (v) std::printf("highest rate with 0 lost and p99 < %.0f ms, %s: %d frames/s\n", opt.max_p99_ms, m, v);
-    else std::printf("highest rate with 0 lost and p99 < %.0f ms, %s: none of the rates\n", opt.max_p99_ms, m);
+    if (v)
+      std::printf("highest rate with 0 lost and p99 < %.0f ms, %s: %d frames/s\n", opt.max_p99_ms,
+                  m, v);
+    else
+      std::printf("highest rate with 0 lost and p99 < %.0f ms, %s: none of the rates\n",
+                  opt.max_p99_ms, m);
   };
   says("bridged", best.bridged);
   says("alone", best.alone);
@@ -430,19 +441,25 @@ int pipeline_bench(int argc, char** argv) {
   opt.domain = 50 + static_cast<uint32_t>(getpid()) % 150;
   bool subscriber = false;
   std::string log_level = "warn";
-  CLI::App app{"pipeline_bench: BusObserver + DdsPublisher natively, latency/loss/CPU/RSS per TPDO rate"};
+  CLI::App app{
+      "pipeline_bench: BusObserver + DdsPublisher natively, latency/loss/CPU/RSS per TPDO rate"};
   app.add_option("--rates", opt.rates, "TPDO frames per second, one run each")->delimiter(',');
   app.add_option("--seconds", opt.seconds, "seconds per run (default 3)");
-  app.add_option("--nodes", opt.nodes, "stepnodes on the simulated bus, TPDOs round robin (default 10)")
+  app.add_option("--nodes", opt.nodes,
+                 "stepnodes on the simulated bus, TPDOs round robin (default 10)")
       ->check(CLI::Range(1, 127));
   app.add_option("--modes", opt.modes, "bridged and/or alone (default both)")
       ->delimiter(',')
       ->check(CLI::IsMember({"bridged", "alone"}));
   app.add_option("--domain", opt.domain, "DDS domain (default 50 + pid % 150)");
-  app.add_option("--profiles", opt.profiles, "Fast DDS XML profiles for every participant (QoS experiments)");
-  app.add_option("--slice-us", opt.slice_us, "generator pacing slice (default 100 us)")->check(CLI::Range(10, 100000));
-  app.add_option("--max-p99-ms", opt.max_p99_ms, "p99 limit for the 'highest rate' line (default 10)");
-  app.add_option("--reader-depth", opt.reader_depth, "subscriber history: 0 KEEP_ALL (default), N KEEP_LAST N")
+  app.add_option("--profiles", opt.profiles,
+                 "Fast DDS XML profiles for every participant (QoS experiments)");
+  app.add_option("--slice-us", opt.slice_us, "generator pacing slice (default 100 us)")
+      ->check(CLI::Range(10, 100000));
+  app.add_option("--max-p99-ms", opt.max_p99_ms,
+                 "p99 limit for the 'highest rate' line (default 10)");
+  app.add_option("--reader-depth", opt.reader_depth,
+                 "subscriber history: 0 KEEP_ALL (default), N KEEP_LAST N")
       ->check(CLI::Range(0, 100'000));
   app.add_option("--sub-port-queue", opt.sub_port_queue,
                  "subscriber's shared-memory port queue (datagrams; 0: Fast DDS default 512)")
@@ -458,7 +475,8 @@ int pipeline_bench(int argc, char** argv) {
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
   try {
-    if (subscriber) return bench::run_subscriber(opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
+    if (subscriber)
+      return bench::run_subscriber(opt.domain, opt.profiles, opt.reader_depth, opt.sub_port_queue);
     return run_publisher(opt, "/proc/self/exe");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pipeline_bench: %s\n", e.what());

@@ -2,21 +2,22 @@
 // (SubscriberProcess): a RELIABLE reader of AxisPosition that measures
 // latency (now - can_time_ns) and loss (sequence numbers that never arrived) of each run
 // the publishing process announces, and reports over a pipe (stdin, stdout).
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <fastdds/dds/core/LoanableSequence.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
-#include <spawn.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <sstream>
@@ -42,8 +43,25 @@ using eprosima::fastrtps::types::ReturnCode_t;
 double process_cpu_s() {
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
-  auto tv = [](const timeval& t) { return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6; };
+  auto tv = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
+  };
   return tv(ru.ru_utime) + tv(ru.ru_stime);
+}
+
+double clock_s(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+long status_kb(const char* key) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  const size_t n = std::strlen(key);
+  while (std::getline(status, line))
+    if (line.compare(0, n, key) == 0) return std::stol(line.substr(n));
+  return 0;
 }
 
 int64_t percentile(const std::vector<int64_t>& sorted, double p) {
@@ -56,9 +74,11 @@ efd::Topic* register_axis_position(efd::DomainParticipant* participant) {
   bridge::dds::Naming naming;
   const auto kind = bridge::dds::TopicKind::AxisPosition;
   std::string type = bridge::dds::type_name(kind, naming);
-  if (bridge::dds::make_type_support(kind, naming).register_type(participant, type) != ReturnCode_t::RETCODE_OK)
+  if (bridge::dds::make_type_support(kind, naming).register_type(participant, type) !=
+      ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("type " + type + ": registration refused");
-  efd::Topic* topic = participant->create_topic(bridge::dds::topic_name(kind, naming), type, efd::TOPIC_QOS_DEFAULT);
+  efd::Topic* topic = participant->create_topic(bridge::dds::topic_name(kind, naming), type,
+                                                efd::TOPIC_QOS_DEFAULT);
   if (!topic) throw std::runtime_error("topic AxisPosition: Fast DDS could not create it");
   return topic;
 }
@@ -110,7 +130,8 @@ class PositionListener : public efd::DataReaderListener {
     }
   }
   // Copies out under the lock.
-  void snapshot(uint64_t& taken, uint64_t& in_range, uint64_t& duplicates, std::vector<int64_t>* latencies) {
+  void snapshot(uint64_t& taken, uint64_t& in_range, uint64_t& duplicates,
+                std::vector<int64_t>* latencies) {
     std::lock_guard<std::mutex> lock(mutex_);
     taken = taken_;
     in_range = in_range_;
@@ -135,25 +156,29 @@ void load_port_queue_profile(uint32_t port_queue) {
 <transport_descriptors>
 <transport_descriptor><transport_id>bench_shm</transport_id><type>SHM</type>
 <segment_size>)" + std::to_string(std::max<uint32_t>(512 * 1024, port_queue * 512)) +
-                    R"(</segment_size><port_queue_capacity>)" + std::to_string(port_queue) + R"(</port_queue_capacity>
+                    R"(</segment_size><port_queue_capacity>)" + std::to_string(port_queue) +
+                    R"(</port_queue_capacity>
 </transport_descriptor>
 <transport_descriptor><transport_id>bench_udp</transport_id><type>UDPv4</type></transport_descriptor>
 </transport_descriptors>
-<participant profile_name=")" + std::string(bridge::dds::kParticipantProfile) + R"("><rtps>
+<participant profile_name=")" +
+                    std::string(bridge::dds::kParticipantProfile) + R"("><rtps>
 <userTransports><transport_id>bench_shm</transport_id><transport_id>bench_udp</transport_id></userTransports>
 <useBuiltinTransports>false</useBuiltinTransports></rtps></participant>
 </profiles></dds>)";
-  if (efd::DomainParticipantFactory::get_instance()->load_XML_profiles_string(xml.c_str(), xml.size()) !=
-      ReturnCode_t::RETCODE_OK)
+  if (efd::DomainParticipantFactory::get_instance()->load_XML_profiles_string(
+          xml.c_str(), xml.size()) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("subscriber: Fast DDS rejected the port queue profile");
 }
 
 // RELIABLE; KEEP_ALL (depth 0) with room for more than the listener ever leaves untaken,
 // or KEEP_LAST depth per instance.
-efd::DataReader* create_reader(efd::DomainParticipant* participant, int32_t depth, PositionListener& listener) {
+efd::DataReader* create_reader(efd::DomainParticipant* participant, int32_t depth,
+                               PositionListener& listener) {
   efd::Topic* topic = register_axis_position(participant);
   efd::Subscriber* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
-  efd::DataReaderQos qos = bridge::dds::builtin_reader_qos(bridge::dds::TopicKind::AxisPosition, false, 1);
+  efd::DataReaderQos qos =
+      bridge::dds::builtin_reader_qos(bridge::dds::TopicKind::AxisPosition, false, 1);
   const int32_t per_instance = depth > 0 ? depth : 100'000;
   qos.history().kind = depth > 0 ? efd::KEEP_LAST_HISTORY_QOS : efd::KEEP_ALL_HISTORY_QOS;
   qos.history().depth = per_instance;
@@ -187,8 +212,9 @@ void report(PositionListener& listener, int32_t first, int32_t end, double cpu_a
   std::vector<int64_t> lat;
   listener.snapshot(taken, in_range, dups, &lat);
   std::sort(lat.begin(), lat.end());
-  std::cout << "result " << in_range << ' ' << dups << ' ' << percentile(lat, 0.5) << ' ' << percentile(lat, 0.99)
-            << ' ' << (lat.empty() ? 0 : lat.back()) << ' ' << process_cpu_s() - cpu_at_begin << std::endl;
+  std::cout << "result " << in_range << ' ' << dups << ' ' << percentile(lat, 0.5) << ' '
+            << percentile(lat, 0.99) << ' ' << (lat.empty() ? 0 : lat.back()) << ' '
+            << process_cpu_s() - cpu_at_begin << std::endl;
 }
 
 }  // namespace
@@ -198,7 +224,8 @@ void report(PositionListener& listener, int32_t first, int32_t end, double cpu_a
 //   report            -> "result RECEIVED DUPLICATES P50_NS P99_NS MAX_NS CPU_S"
 //                        once all arrived, or nothing new came for 500 ms
 //   quit
-int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth, uint32_t port_queue) {
+int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth,
+                   uint32_t port_queue) {
   if (port_queue > 0) load_port_queue_profile(port_queue);
   bridge::dds::ParticipantOptions po;
   po.domain = domain;
@@ -232,8 +259,9 @@ int run_subscriber(uint32_t domain, const std::string& profiles, int32_t depth, 
   return 0;
 }
 
-SubscriberProcess::SubscriberProcess(const std::string& exe, uint32_t domain, const std::string& profiles,
-                                     int32_t depth, uint32_t port_queue) {
+SubscriberProcess::SubscriberProcess(const std::string& exe, uint32_t domain,
+                                     const std::string& profiles, int32_t depth,
+                                     uint32_t port_queue) {
   int to_child[2], from_child[2];
   if (pipe(to_child) != 0 || pipe(from_child) != 0) throw std::runtime_error("pipe failed");
   posix_spawn_file_actions_t actions;
@@ -242,8 +270,13 @@ SubscriberProcess::SubscriberProcess(const std::string& exe, uint32_t domain, co
   posix_spawn_file_actions_adddup2(&actions, from_child[1], 1);
   posix_spawn_file_actions_addclose(&actions, to_child[1]);
   posix_spawn_file_actions_addclose(&actions, from_child[0]);
-  std::vector<std::string> args{exe,           "--subscriber",        "--domain", std::to_string(domain),
-                                "--reader-depth", std::to_string(depth), "--sub-port-queue",
+  std::vector<std::string> args{exe,
+                                "--subscriber",
+                                "--domain",
+                                std::to_string(domain),
+                                "--reader-depth",
+                                std::to_string(depth),
+                                "--sub-port-queue",
                                 std::to_string(port_queue)};
   if (!profiles.empty()) args.insert(args.end(), {"--profiles", profiles});
   std::vector<char*> argv;
@@ -254,7 +287,8 @@ SubscriberProcess::SubscriberProcess(const std::string& exe, uint32_t domain, co
   posix_spawn_file_actions_destroy(&actions);
   close(to_child[0]);
   close(from_child[1]);
-  if (rc != 0) throw std::runtime_error("cannot start the subscriber: " + std::string(std::strerror(rc)));
+  if (rc != 0)
+    throw std::runtime_error("cannot start the subscriber: " + std::string(std::strerror(rc)));
   out_ = fdopen(to_child[1], "w");
   in_ = fdopen(from_child[0], "r");
   if (expect_line() != "ready") throw std::runtime_error("subscriber did not start");

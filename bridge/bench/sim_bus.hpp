@@ -38,8 +38,8 @@ struct SimBusOptions {
   // filters: the broadcast services NMT, SYNC, TIME, LSS, and every COB-ID whose low 7
   // bits are its node-ID, which covers its SDO, RPDOs, guarding and the node-ID check).
   // The bridge's figures barely change (127 nodes: all discovered after 7.16 s without,
-  // 7.15 s with, in one measurement: a node's tick phase moves with the frames it handles); without the filter
-  // today's node spends a full tick on each frame and the bench runs 6 times longer.
+  // 7.15 s with, in one measurement: a node's tick phase moves with the frames it handles); without
+  // the filter today's node spends a full tick on each frame and the bench runs 6 times longer.
   bool node_filters = true;
   ObserverConfig observer;
   // Called with true before and false after every observer call (the bench counts the

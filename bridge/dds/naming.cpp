@@ -53,7 +53,8 @@ void validate_ros2_prefix(const std::string& prefix) {
       segment_start = true;
       continue;
     }
-    if (!alpha && !digit) bad(std::string("character '") + c + "' is not allowed (A-Z a-z 0-9 _ /)");
+    if (!alpha && !digit)
+      bad(std::string("character '") + c + "' is not allowed (A-Z a-z 0-9 _ /)");
     if (segment_start && digit) bad("a segment must not start with a digit");
     segment_start = false;
   }

@@ -1,7 +1,7 @@
 // Topic and type names of the bridge's five topics, plain (default) or ROS 2.
 //
-// Plain: topics "AxisStatus", "AxisPosition", "NodeHealth", "Emergency", "DriveStatus" with the IDL's
-// own type names "stepnode::AxisStatus" ... (what fastddsgen and Cyclone's idlc generate).
+// Plain: topics "AxisStatus", "AxisPosition", "NodeHealth", "Emergency", "DriveStatus" with the
+// IDL's own type names "stepnode::AxisStatus" ... (what fastddsgen and Cyclone's idlc generate).
 //
 // ROS 2 (rmw_fastrtps conventions): topic "rt/<prefix>/axis_status" ... and type
 // "stepnode::msg::dds_::AxisStatus_" ..., what a ROS 2 package `stepnode` with
@@ -20,8 +20,8 @@ namespace stepnode::bridge::dds {
 
 enum class TopicKind : uint8_t { AxisStatus, AxisPosition, NodeHealth, Emergency, DriveStatus };
 constexpr std::array<TopicKind, 5> kAllTopics{TopicKind::AxisStatus, TopicKind::AxisPosition,
-                                             TopicKind::NodeHealth, TopicKind::Emergency,
-                                             TopicKind::DriveStatus};
+                                              TopicKind::NodeHealth, TopicKind::Emergency,
+                                              TopicKind::DriveStatus};
 constexpr std::size_t kTopicCount = kAllTopics.size();
 
 struct Naming {

@@ -1,8 +1,8 @@
 #include "bridge/dds/participant.hpp"
 
+#include <spdlog/spdlog.h>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
-#include <spdlog/spdlog.h>
 
 #include <filesystem>
 #include <stdexcept>
@@ -21,22 +21,26 @@ using eprosima::fastrtps::types::ReturnCode_t;
 
 efd::DomainParticipant* create_participant(const ParticipantOptions& options) {
   if (options.domain > kMaxDomain)
-    throw std::invalid_argument("domain " + std::to_string(options.domain) + ": must be 0.." + std::to_string(kMaxDomain));
+    throw std::invalid_argument("domain " + std::to_string(options.domain) + ": must be 0.." +
+                                std::to_string(kMaxDomain));
   auto* factory = efd::DomainParticipantFactory::get_instance();
   if (!options.profiles_file.empty()) {
     if (!std::filesystem::is_regular_file(options.profiles_file))
       throw std::invalid_argument("profiles " + options.profiles_file + ": cannot read file");
     if (factory->load_XML_profiles_file(options.profiles_file) != ReturnCode_t::RETCODE_OK)
-      throw std::invalid_argument("profiles " + options.profiles_file + ": Fast DDS rejected the XML");
+      throw std::invalid_argument("profiles " + options.profiles_file +
+                                  ": Fast DDS rejected the XML");
   }
   // Loads the environment's default profile file (once per process) and makes its default
   // participant profile the default participant QoS. Must come before the QoS is read.
   factory->load_profiles();
 
   efd::DomainParticipantQos qos = factory->get_default_participant_qos();
-  if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) == ReturnCode_t::RETCODE_OK)
+  if (factory->get_participant_qos_from_profile(kParticipantProfile, qos) ==
+      ReturnCode_t::RETCODE_OK)
     spdlog::debug("participant QoS from XML profile {}", kParticipantProfile);
-  if (qos.name().to_string().empty() || qos.name().to_string() == "RTPSParticipant") qos.name(options.name);
+  if (qos.name().to_string().empty() || qos.name().to_string() == "RTPSParticipant")
+    qos.name(options.name);
   if (options.security.enabled()) {
     check_security_files(options.security);  // a wrong file: one line that names it
     add_security_properties(options.security, qos);
@@ -46,10 +50,12 @@ efd::DomainParticipant* create_participant(const ParticipantOptions& options) {
   // grant Fast DDS cannot parse, or that does not let this participant join the domain).
   if (!participant && options.security.enabled())
     throw std::invalid_argument("dds.security: Fast DDS refused the participant on domain " +
-                                std::to_string(options.domain) + " (the governance or permissions content; " +
+                                std::to_string(options.domain) +
+                                " (the governance or permissions content; " +
                                 "Fast DDS's log above says which)");
   if (!participant)
-    throw std::runtime_error("DDS domain " + std::to_string(options.domain) + ": Fast DDS could not create a participant");
+    throw std::runtime_error("DDS domain " + std::to_string(options.domain) +
+                             ": Fast DDS could not create a participant");
   return participant;
 }
 

@@ -22,7 +22,7 @@ struct ParticipantOptions {
   uint32_t domain = 0;
   std::string profiles_file;  // empty: only the environment's default file
   std::string name = "stepnode";
-  SecurityFiles security;     // empty: no DDS Security (unless an XML profile sets it)
+  SecurityFiles security;  // empty: no DDS Security (unless an XML profile sets it)
 };
 
 // Throws std::runtime_error naming the file or the domain when Fast DDS refuses, and

@@ -1,10 +1,10 @@
 #include "bridge/dds/publisher.hpp"
 
+#include <spdlog/spdlog.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <ctime>
@@ -24,7 +24,8 @@ uint64_t realtime_ns() {
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<uint64_t>(ts.tv_nsec);
 }
 
-DdsPublisher::DdsPublisher(const PublisherOptions& options) : naming_(options.naming), domain_(options.participant.domain) {
+DdsPublisher::DdsPublisher(const PublisherOptions& options)
+    : naming_(options.naming), domain_(options.participant.domain) {
   if (naming_.ros2) validate_ros2_prefix(naming_.ros2_prefix);
   participant_ = create_participant(options.participant);
   try {
@@ -38,21 +39,25 @@ DdsPublisher::DdsPublisher(const PublisherOptions& options) : naming_(options.na
         throw std::runtime_error("type " + type + ": registration refused");
       std::string topic = topic_name(kind, naming_);
       topics_[i] = participant_->create_topic(topic, type, efd::TOPIC_QOS_DEFAULT);
-      if (!topics_[i]) throw std::runtime_error("topic " + topic + ": Fast DDS could not create it");
+      if (!topics_[i])
+        throw std::runtime_error("topic " + topic + ": Fast DDS could not create it");
       bool from_profile = false;
       efd::DataWriterQos qos = writer_qos(kind, naming_.ros2, *publisher_, &from_profile);
       writers_[i] = publisher_->create_datawriter(topics_[i], qos);
-      if (!writers_[i]) throw std::runtime_error("topic " + topic + ": Fast DDS refused the writer QoS");
-      spdlog::debug("DDS writer {} type {} ({} QoS)", topic, type, from_profile ? "XML profile " + profile_name(kind) : "built-in");
+      if (!writers_[i])
+        throw std::runtime_error("topic " + topic + ": Fast DDS refused the writer QoS");
+      spdlog::debug("DDS writer {} type {} ({} QoS)", topic, type,
+                    from_profile ? "XML profile " + profile_name(kind) : "built-in");
     }
   } catch (...) {
     delete_participant(participant_);
     throw;
   }
-  spdlog::info("DDS domain {}: topics {} / {} / {} / {} / {}{}", domain_, topic_name(TopicKind::AxisStatus, naming_),
-               topic_name(TopicKind::AxisPosition, naming_), topic_name(TopicKind::NodeHealth, naming_),
-               topic_name(TopicKind::Emergency, naming_), topic_name(TopicKind::DriveStatus, naming_),
-               naming_.ros2 ? " (ROS 2 naming, unkeyed)" : "");
+  spdlog::info(
+      "DDS domain {}: topics {} / {} / {} / {} / {}{}", domain_,
+      topic_name(TopicKind::AxisStatus, naming_), topic_name(TopicKind::AxisPosition, naming_),
+      topic_name(TopicKind::NodeHealth, naming_), topic_name(TopicKind::Emergency, naming_),
+      topic_name(TopicKind::DriveStatus, naming_), naming_.ros2 ? " (ROS 2 naming, unkeyed)" : "");
 }
 
 DdsPublisher::~DdsPublisher() { delete_participant(participant_); }
@@ -66,20 +71,23 @@ bool DdsPublisher::write(TopicKind kind, void* data) {
   // Logged at the 1st, 2nd, 4th, 8th ... failure so an overload cannot flood the log.
   ++write_failures_;
   if ((write_failures_ & (write_failures_ - 1)) == 0)
-    spdlog::warn("DDS write on {} failed (code {}), {} failures so far", topic_name(kind, naming_), rc(), write_failures_);
+    spdlog::warn("DDS write on {} failed (code {}), {} failures so far", topic_name(kind, naming_),
+                 rc(), write_failures_);
   return false;
 }
 
 void DdsPublisher::axis_status(const AxisStatusSample& sample) {
   ::stepnode::AxisStatus data = to_idl(sample);
-  if (write(TopicKind::AxisStatus, &data)) status_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+  if (write(TopicKind::AxisStatus, &data))
+    status_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
 }
 
 void DdsPublisher::axis_position(const AxisPositionSample& sample) {
   AxisPositionSample stamped = sample;
   stamped.publish_time_ns = realtime_ns();
   ::stepnode::AxisPosition data = to_idl(stamped);
-  if (write(TopicKind::AxisPosition, &data)) position_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+  if (write(TopicKind::AxisPosition, &data))
+    position_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
 }
 
 void DdsPublisher::node_health(const NodeHealthSample& sample) {
@@ -96,7 +104,8 @@ void DdsPublisher::drive_status(const DriveStatusSample& sample) {
   DriveStatusSample stamped = sample;
   stamped.publish_time_ns = realtime_ns();
   ::stepnode::DriveStatus data = to_idl(stamped);
-  if (write(TopicKind::DriveStatus, &data)) drive_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+  if (write(TopicKind::DriveStatus, &data))
+    drive_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
 }
 
 void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
@@ -107,7 +116,8 @@ void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
       auto data = make(static_cast<uint8_t>(*it & 0xFF));
       ReturnCode_t rc = writer(kind)->dispose(&data, efd::HANDLE_NIL);
       if (rc != ReturnCode_t::RETCODE_OK)
-        spdlog::warn("DDS dispose of node {} axis {} on {} failed (code {})", node, *it & 0xFF, topic_name(kind, naming_), rc());
+        spdlog::warn("DDS dispose of node {} axis {} on {} failed (code {})", node, *it & 0xFF,
+                     topic_name(kind, naming_), rc());
       it = instances.erase(it);
     }
   };
@@ -137,10 +147,12 @@ void DdsPublisher::wait_acknowledged(uint32_t timeout_ms) {
   auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
   for (auto* w : writers_) {
     if (!w) continue;
-    auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - std::chrono::steady_clock::now()).count();
+    auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    deadline - std::chrono::steady_clock::now())
+                    .count();
     if (left <= 0) break;
-    w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(static_cast<int32_t>(left / 1'000'000'000),
-                                                               static_cast<uint32_t>(left % 1'000'000'000)));
+    w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+        static_cast<int32_t>(left / 1'000'000'000), static_cast<uint32_t>(left % 1'000'000'000)));
   }
 }
 

@@ -54,7 +54,9 @@ class DdsPublisher final : public SampleSink {
 
  private:
   bool write(TopicKind kind, void* data);
-  eprosima::fastdds::dds::DataWriter* writer(TopicKind kind) const { return writers_[static_cast<size_t>(kind)]; }
+  eprosima::fastdds::dds::DataWriter* writer(TopicKind kind) const {
+    return writers_[static_cast<size_t>(kind)];
+  }
 
   Naming naming_;
   uint32_t domain_ = 0;
@@ -62,7 +64,7 @@ class DdsPublisher final : public SampleSink {
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   std::array<eprosima::fastdds::dds::Topic*, kTopicCount> topics_{};
   std::array<eprosima::fastdds::dds::DataWriter*, kTopicCount> writers_{};
-  std::set<uint16_t> status_instances_;    // node << 8 | axis, written and not disposed
+  std::set<uint16_t> status_instances_;  // node << 8 | axis, written and not disposed
   std::set<uint16_t> position_instances_;
   std::set<uint16_t> drive_instances_;
   uint64_t written_ = 0;

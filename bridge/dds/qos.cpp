@@ -34,7 +34,8 @@ efd::DataWriterQos builtin_writer_qos(TopicKind kind, bool ros2) {
   efd::DataWriterQos qos = efd::DATAWRITER_QOS_DEFAULT;
   qos.reliability().kind = efd::RELIABLE_RELIABILITY_QOS;
   qos.reliability().max_blocking_time = eprosima::fastrtps::Duration_t(0, 1'000'000);  // 1 ms
-  qos.durability().kind = transient_local(kind) ? efd::TRANSIENT_LOCAL_DURABILITY_QOS : efd::VOLATILE_DURABILITY_QOS;
+  qos.durability().kind =
+      transient_local(kind) ? efd::TRANSIENT_LOCAL_DURABILITY_QOS : efd::VOLATILE_DURABILITY_QOS;
   history(qos, writer_depth(kind, ros2), ros2);
   qos.data_sharing().off();
   qos.publish_mode().kind = efd::SYNCHRONOUS_PUBLISH_MODE;
@@ -49,7 +50,8 @@ efd::DataWriterQos builtin_writer_qos(TopicKind kind, bool ros2) {
     // 60,000/s). With 1 ms the timer is re-armed at most once per ms; a NACK for a sample
     // sent less than 1 ms ago is ignored (it is still in flight), which only matters for
     // the repair of a lost sample.
-    qos.reliable_writer_qos().times.nackSupressionDuration = eprosima::fastrtps::Duration_t(0, 1'000'000);
+    qos.reliable_writer_qos().times.nackSupressionDuration =
+        eprosima::fastrtps::Duration_t(0, 1'000'000);
   }
   return qos;
 }
@@ -57,23 +59,27 @@ efd::DataWriterQos builtin_writer_qos(TopicKind kind, bool ros2) {
 efd::DataReaderQos builtin_reader_qos(TopicKind kind, bool ros2, int32_t depth) {
   efd::DataReaderQos qos = efd::DATAREADER_QOS_DEFAULT;
   qos.reliability().kind = efd::RELIABLE_RELIABILITY_QOS;
-  qos.durability().kind = transient_local(kind) ? efd::TRANSIENT_LOCAL_DURABILITY_QOS : efd::VOLATILE_DURABILITY_QOS;
+  qos.durability().kind =
+      transient_local(kind) ? efd::TRANSIENT_LOCAL_DURABILITY_QOS : efd::VOLATILE_DURABILITY_QOS;
   history(qos, depth > 0 ? depth : writer_depth(kind, ros2), ros2);
   qos.data_sharing().off();
   return qos;
 }
 
-efd::DataWriterQos writer_qos(TopicKind kind, bool ros2, const efd::Publisher& publisher, bool* from_profile) {
+efd::DataWriterQos writer_qos(TopicKind kind, bool ros2, const efd::Publisher& publisher,
+                              bool* from_profile) {
   efd::DataWriterQos qos;
-  bool found = publisher.get_datawriter_qos_from_profile(profile_name(kind), qos) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  bool found = publisher.get_datawriter_qos_from_profile(profile_name(kind), qos) ==
+               eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
   if (from_profile) *from_profile = found;
   return found ? qos : builtin_writer_qos(kind, ros2);
 }
 
-efd::DataReaderQos reader_qos(TopicKind kind, bool ros2, const efd::Subscriber& subscriber, int32_t depth,
-                              bool* from_profile) {
+efd::DataReaderQos reader_qos(TopicKind kind, bool ros2, const efd::Subscriber& subscriber,
+                              int32_t depth, bool* from_profile) {
   efd::DataReaderQos qos;
-  bool found = subscriber.get_datareader_qos_from_profile(profile_name(kind), qos) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  bool found = subscriber.get_datareader_qos_from_profile(profile_name(kind), qos) ==
+               eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
   if (from_profile) *from_profile = found;
   return found ? qos : builtin_reader_qos(kind, ros2, depth);
 }

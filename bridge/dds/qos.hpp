@@ -37,13 +37,16 @@ constexpr int32_t kEmergencyDepth = 32;
 // Built-in QoS (no profile): what the table above says.
 eprosima::fastdds::dds::DataWriterQos builtin_writer_qos(TopicKind kind, bool ros2);
 // `depth` 0: the writer's depth.
-eprosima::fastdds::dds::DataReaderQos builtin_reader_qos(TopicKind kind, bool ros2, int32_t depth = 0);
+eprosima::fastdds::dds::DataReaderQos builtin_reader_qos(TopicKind kind, bool ros2,
+                                                         int32_t depth = 0);
 
 // The profile's QoS when one named profile_name(kind) is loaded, else the built-in one.
 // `from_profile` tells which (logged by the callers).
-eprosima::fastdds::dds::DataWriterQos writer_qos(TopicKind kind, bool ros2, const eprosima::fastdds::dds::Publisher& publisher,
+eprosima::fastdds::dds::DataWriterQos writer_qos(TopicKind kind, bool ros2,
+                                                 const eprosima::fastdds::dds::Publisher& publisher,
                                                  bool* from_profile = nullptr);
-eprosima::fastdds::dds::DataReaderQos reader_qos(TopicKind kind, bool ros2, const eprosima::fastdds::dds::Subscriber& subscriber,
-                                                 int32_t depth = 0, bool* from_profile = nullptr);
+eprosima::fastdds::dds::DataReaderQos reader_qos(
+    TopicKind kind, bool ros2, const eprosima::fastdds::dds::Subscriber& subscriber,
+    int32_t depth = 0, bool* from_profile = nullptr);
 
 }  // namespace stepnode::bridge::dds

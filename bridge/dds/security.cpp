@@ -36,7 +36,8 @@ void refuse_unknown(const config::TomlFile& file, const toml::table& table, std:
   }
 }
 
-void set_property(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& name, const std::string& value) {
+void set_property(eprosima::fastdds::dds::DomainParticipantQos& qos, const std::string& name,
+                  const std::string& value) {
   auto& props = qos.properties().properties();
   for (auto& p : props)
     if (p.name() == name) {
@@ -64,16 +65,20 @@ SecurityFiles load_security_table(const config::TomlFile& file) {
   const std::filesystem::path base = std::filesystem::absolute(file.path()).parent_path();
   for (const FileKey& k : kFileKeys) {
     const toml::node* n = security->get(k.key);
-    if (!n) file.refuse(full_key(k.key), "missing (DDS Security needs identity_ca, identity_certificate, "
-                                         "private_key, permissions_ca, governance and permissions)");
-    if (!n->is_string() || n->as_string()->get().empty()) file.refuse(full_key(k.key), "must be a file path");
+    if (!n)
+      file.refuse(full_key(k.key),
+                  "missing (DDS Security needs identity_ca, identity_certificate, "
+                  "private_key, permissions_ca, governance and permissions)");
+    if (!n->is_string() || n->as_string()->get().empty())
+      file.refuse(full_key(k.key), "must be a file path");
     std::filesystem::path p(n->as_string()->get());
     files.*k.member = (p.is_absolute() ? p : base / p).lexically_normal().string();
   }
   return files;
 }
 
-void add_security_properties(const SecurityFiles& files, eprosima::fastdds::dds::DomainParticipantQos& qos) {
+void add_security_properties(const SecurityFiles& files,
+                             eprosima::fastdds::dds::DomainParticipantQos& qos) {
   // Property names of Fast DDS 2.9's builtin plugins (its documentation, "Security").
   const std::string auth = "dds.sec.auth.builtin.PKI-DH.";
   const std::string access = "dds.sec.access.builtin.Access-Permissions.";

@@ -40,6 +40,7 @@ void check_security_files(const SecurityFiles& files);
 
 // Sets the dds.sec.* properties (file:// URIs) on `qos`, replacing any of the same name
 // an XML profile set.
-void add_security_properties(const SecurityFiles& files, eprosima::fastdds::dds::DomainParticipantQos& qos);
+void add_security_properties(const SecurityFiles& files,
+                             eprosima::fastdds::dds::DomainParticipantQos& qos);
 
 }  // namespace stepnode::bridge::dds

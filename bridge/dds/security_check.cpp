@@ -32,7 +32,8 @@ using StoreCtx = std::unique_ptr<X509_STORE_CTX, Deleter<X509_STORE_CTX, X509_ST
 using Pkcs7 = std::unique_ptr<PKCS7, Deleter<PKCS7, PKCS7_free>>;
 
 [[noreturn]] void refuse(const char* key, const std::string& path, const std::string& why) {
-  ERR_clear_error();  // OpenSSL's queue would otherwise carry this failure into Fast DDS's next call
+  ERR_clear_error();  // OpenSSL's queue would otherwise carry this failure into Fast DDS's next
+                      // call
   throw std::invalid_argument("dds.security." + std::string(key) + " " + path + ": " + why);
 }
 
@@ -52,7 +53,8 @@ Cert read_certificate(const char* key, const std::string& path) {
 
 Store store_of(const Cert& ca) {
   Store store(X509_STORE_new());
-  if (!store || X509_STORE_add_cert(store.get(), ca.get()) != 1) throw std::runtime_error("OpenSSL: out of memory");
+  if (!store || X509_STORE_add_cert(store.get(), ca.get()) != 1)
+    throw std::runtime_error("OpenSSL: out of memory");
   return store;
 }
 
@@ -102,16 +104,19 @@ void check_identity(const SecurityFiles& f) {
   Key key(PEM_read_bio_PrivateKey(bio.get(), nullptr, nullptr, nullptr));
   if (!key) refuse("private_key", f.private_key, "not an unencrypted PEM private key");
   if (X509_check_private_key(cert.get(), key.get()) != 1)
-    refuse("private_key", f.private_key, "is not the key of identity_certificate " + f.identity_certificate);
+    refuse("private_key", f.private_key,
+           "is not the key of identity_certificate " + f.identity_certificate);
 }
 
 // The document's text when the permissions CA signed it (S/MIME, as `openssl smime -sign`).
-std::string signed_text(const char* key, const std::string& path, const Cert& ca, const std::string& ca_path) {
+std::string signed_text(const char* key, const std::string& path, const Cert& ca,
+                        const std::string& ca_path) {
   Bio bio = open_file(key, path);
   BIO* content_raw = nullptr;
   Pkcs7 p7(SMIME_read_PKCS7(bio.get(), &content_raw));
   Bio content(content_raw);
-  if (!p7) refuse(key, path, "not an S/MIME signed document (sign it with openssl smime -sign -text)");
+  if (!p7)
+    refuse(key, path, "not an S/MIME signed document (sign it with openssl smime -sign -text)");
   Store store = store_of(ca);
   Bio out(BIO_new(BIO_s_mem()));
   if (PKCS7_verify(p7.get(), nullptr, store.get(), content.get(), out.get(), PKCS7_TEXT) != 1)
@@ -136,9 +141,11 @@ void check_documents(const SecurityFiles& f) {
   Cert ca = read_certificate("permissions_ca", f.permissions_ca);
   signed_text("governance", f.governance, ca, f.permissions_ca);
   const std::string permissions = signed_text("permissions", f.permissions, ca, f.permissions_ca);
-  const std::string subject = rfc2253_subject(read_certificate("identity_certificate", f.identity_certificate));
+  const std::string subject =
+      rfc2253_subject(read_certificate("identity_certificate", f.identity_certificate));
   if (!has_grant_for(permissions, subject))
-    refuse("permissions", f.permissions, "no grant for " + subject + " (the subject of identity_certificate)");
+    refuse("permissions", f.permissions,
+           "no grant for " + subject + " (the subject of identity_certificate)");
 }
 
 }  // namespace

@@ -7,7 +7,8 @@ namespace {
 
 template <class Generated>
 eprosima::fastdds::dds::TypeSupport support(TopicKind kind, const Naming& naming) {
-  if (naming.ros2) return eprosima::fastdds::dds::TypeSupport(new UnkeyedType<Generated>(type_name(kind, naming)));
+  if (naming.ros2)
+    return eprosima::fastdds::dds::TypeSupport(new UnkeyedType<Generated>(type_name(kind, naming)));
   return eprosima::fastdds::dds::TypeSupport(new Generated());
 }
 

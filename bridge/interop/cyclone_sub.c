@@ -38,22 +38,28 @@ static int parse_uint(const char* text, long max, long* out) {
 }
 
 static void print_status(const stepnode_AxisStatus* s) {
-  printf("AxisStatus node=%u axis=%u status_bits=0x%04x error_bits=0x%02x emergency_stop=%d lower_limit=%d "
-         "upper_limit=%d illegal_move=%d motor_stalled=%d power_up_error=%d position_valid=%d resumable=%d "
-         "axis2_selected=%d axis3_selected=%d at_home=%d accelerating=%d decelerating=%d moving=%d done_code=%d "
-         "hp_error=%u can_time_ns=%" PRIu64 "\n",
-         s->node, s->axis, s->status_bits, s->error_bits, s->emergency_stop, s->lower_limit, s->upper_limit,
-         s->illegal_move, s->motor_stalled, s->power_up_error, s->position_valid, s->resumable, s->axis2_selected,
-         s->axis3_selected, s->at_home, s->accelerating, s->decelerating, s->moving, s->done_code, s->hp_error,
-         s->can_time_ns);
+  printf(
+      "AxisStatus node=%u axis=%u status_bits=0x%04x error_bits=0x%02x emergency_stop=%d "
+      "lower_limit=%d "
+      "upper_limit=%d illegal_move=%d motor_stalled=%d power_up_error=%d position_valid=%d "
+      "resumable=%d "
+      "axis2_selected=%d axis3_selected=%d at_home=%d accelerating=%d decelerating=%d moving=%d "
+      "done_code=%d "
+      "hp_error=%u can_time_ns=%" PRIu64 "\n",
+      s->node, s->axis, s->status_bits, s->error_bits, s->emergency_stop, s->lower_limit,
+      s->upper_limit, s->illegal_move, s->motor_stalled, s->power_up_error, s->position_valid,
+      s->resumable, s->axis2_selected, s->axis3_selected, s->at_home, s->accelerating,
+      s->decelerating, s->moving, s->done_code, s->hp_error, s->can_time_ns);
 }
 
 static void print_position(const stepnode_AxisPosition* p) {
   printf("AxisPosition node=%u axis=%u motor_position=%" PRId32 " encoder_position=%" PRId32
-         " motor_user_units=%.6g encoder_user_units=%.6g velocity=%" PRId32 " motion_phase=%u sync_counter=%u"
+         " motor_user_units=%.6g encoder_user_units=%.6g velocity=%" PRId32
+         " motion_phase=%u sync_counter=%u"
          " can_time_ns=%" PRIu64 " publish_time_ns=%" PRIu64 "\n",
-         p->node, p->axis, p->motor_position, p->encoder_position, p->motor_user_units, p->encoder_user_units,
-         p->velocity, p->motion_phase, p->sync_counter, p->can_time_ns, p->publish_time_ns);
+         p->node, p->axis, p->motor_position, p->encoder_position, p->motor_user_units,
+         p->encoder_user_units, p->velocity, p->motion_phase, p->sync_counter, p->can_time_ns,
+         p->publish_time_ns);
 }
 
 /* Takes everything waiting on `reader`; returns the number of samples printed. */
@@ -134,8 +140,10 @@ int main(int argc, char** argv) {
     fprintf(stderr, "cyclone_sub: dds_create_participant: %s\n", dds_strretcode(-participant));
     return 1;
   }
-  dds_entity_t status_topic = dds_create_topic(participant, &stepnode_AxisStatus_desc, "AxisStatus", NULL, NULL);
-  dds_entity_t position_topic = dds_create_topic(participant, &stepnode_AxisPosition_desc, "AxisPosition", NULL, NULL);
+  dds_entity_t status_topic =
+      dds_create_topic(participant, &stepnode_AxisStatus_desc, "AxisStatus", NULL, NULL);
+  dds_entity_t position_topic =
+      dds_create_topic(participant, &stepnode_AxisPosition_desc, "AxisPosition", NULL, NULL);
   if (status_topic < 0 || position_topic < 0) {
     fprintf(stderr, "cyclone_sub: dds_create_topic failed\n");
     dds_delete(participant);
@@ -166,7 +174,9 @@ int main(int argc, char** argv) {
   dds_time_t deadline = timeout_ms > 0 ? dds_time() + DDS_MSECS(timeout_ms) : DDS_NEVER;
   int rc = 0;
   for (;;) {
-    if (stop_requested || (count > 0 && received >= count) || (until_both && statuses > 0 && positions > 0)) break;
+    if (stop_requested || (count > 0 && received >= count) ||
+        (until_both && statuses > 0 && positions > 0))
+      break;
     dds_time_t now = dds_time();
     if (now >= deadline) {
       rc = count > 0 || until_both ? 1 : 0;
@@ -179,8 +189,9 @@ int main(int argc, char** argv) {
     received += drain(position_reader, 0, &positions);
   }
   if (rc)
-    fprintf(stderr, "cyclone_sub: timeout after %ld ms: %ld samples (%ld AxisStatus, %ld AxisPosition)\n", timeout_ms,
-            received, statuses, positions);
+    fprintf(stderr,
+            "cyclone_sub: timeout after %ld ms: %ld samples (%ld AxisStatus, %ld AxisPosition)\n",
+            timeout_ms, received, statuses, positions);
   dds_delete(participant);
   return rc;
 }

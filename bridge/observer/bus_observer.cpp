@@ -33,8 +33,8 @@ NodeSdoChannel channel_of(uint8_t id, const ObserverConfig& c) {
 
 struct Node {
   Node(uint8_t id, const ObserverConfig& c, NodeSdoChannel ch = {})
-      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000, c.own_frames_echoed,
-            ch.client_to_server, ch.server_to_client),
+      : sdo(id, uint64_t{c.sdo_timeout_ms} * 1000, uint64_t{c.sdo_quiet_ms} * 1000,
+            c.own_frames_echoed, ch.client_to_server, ch.server_to_client),
         backoff(c.retry_initial_ms, c.retry_max_ms) {
     health.node = id;
   }
@@ -42,7 +42,7 @@ struct Node {
   SdoChannel sdo;
   DiscoveryPlan plan;
   RetryBackoff backoff;
-  NodeHealthSample health;  // counters and last EMCY live here between publications
+  NodeHealthSample health;     // counters and last EMCY live here between publications
   uint8_t published_axes = 0;  // axis instances the sink may hold (disposed on loss)
   uint64_t last_health_us = 0;
   // After discovery: CiA 402 axes (bit per 0-based axis) whose 603Fh is to be read again
@@ -82,10 +82,10 @@ struct BusObserver::Impl {
   std::array<uint64_t, kNodeIds> early_sdo_us{};
   // CAN-ID -> node, for the SDO channels of the bridge's own (config.sdo_channels).
   std::array<uint8_t, 0x800> sdo_channel_node{};
-  uint32_t random = 1;  // xorshift32 state for the collision jitter
-  TransferPacer pacer;  // the bridge's transfers on the whole bus (issue 13)
+  uint32_t random = 1;       // xorshift32 state for the collision jitter
+  TransferPacer pacer;       // the bridge's transfers on the whole bus (issue 13)
   NetworkTime network_time;  // used with config.network_time
-  unsigned next_first = 1;  // the node the next round of starts begins with
+  unsigned next_first = 1;   // the node the next round of starts begins with
 
   uint32_t next_random() {
     random ^= random << 13;
@@ -103,7 +103,8 @@ struct BusObserver::Impl {
     return *nodes[id];
   }
 
-  void on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t now, std::vector<od::CanFrame>& out);
+  void on_heartbeat(uint8_t id, const od::CanFrame& f, uint64_t now,
+                    std::vector<od::CanFrame>& out);
   void on_emcy(uint8_t id, const ObservedFrame& f, uint64_t now);
   void on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now, std::vector<od::CanFrame>& out);
   void bad(Node* n) {
@@ -112,8 +113,10 @@ struct BusObserver::Impl {
   }
 
   void begin_discovery(Node& n);
-  void read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
-  void refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns, std::vector<od::CanFrame>& out);
+  void read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
+                 std::vector<od::CanFrame>& out);
+  void refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
+                    std::vector<od::CanFrame>& out);
   void sdo_failed(Node& n, uint64_t now);
   void pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out);
   void pump_round(uint64_t now, std::vector<od::CanFrame>& out);
@@ -150,7 +153,8 @@ NodeHealthSample BusObserver::node_health(uint8_t node, uint64_t now_us) const {
   return impl_->health_now(*impl_->nodes[node], now_us);
 }
 
-void BusObserver::on_frame(const ObservedFrame& received, uint64_t now_us, std::vector<od::CanFrame>& out) {
+void BusObserver::on_frame(const ObservedFrame& received, uint64_t now_us,
+                           std::vector<od::CanFrame>& out) {
   Impl& m = *impl_;
   ++m.counters.frames;
   if (received.error_frame)
@@ -204,7 +208,8 @@ void BusObserver::on_frame(const ObservedFrame& received, uint64_t now_us, std::
   }
   if (id != 0) {
     if (function == od::cob::kEmcyBase) return m.on_emcy(id, of, now_us);
-    if (function == od::cob::kSdoTx || function == od::cob::kSdoRx) return m.on_sdo(id, of, now_us, out);
+    if (function == od::cob::kSdoTx || function == od::cob::kSdoRx)
+      return m.on_sdo(id, of, now_us, out);
     if (function == od::cob::kHeartbeat) return m.on_heartbeat(id, f, now_us, out);
   }
   ++m.counters.undecoded;
@@ -343,7 +348,8 @@ void BusObserver::Impl::refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t
   n.backoff.reset();
   n.error_code_reads &= static_cast<uint8_t>(~(1u << n.refresh_axis));
   if (r == ReadOutcome::Value)
-    tpdo.apply_read(id, cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, result.data, can_time_ns);
+    tpdo.apply_read(id, cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, result.data,
+                    can_time_ns);
   pump(n, now, out);
 }
 
@@ -409,7 +415,8 @@ void BusObserver::Impl::publish_health(Node& n, uint64_t now) {
   sink.node_health(health_now(n, now));
 }
 
-void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/, std::vector<od::CanFrame>& out) {
+void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/,
+                          std::vector<od::CanFrame>& out) {
   Impl& m = *impl_;
   const uint64_t health_period_us = uint64_t{m.config.health_period_ms} * 1000;
   for (unsigned id = 1; id < kNodeIds; ++id) {

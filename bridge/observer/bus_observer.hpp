@@ -22,17 +22,17 @@ struct NodeSdoChannel {
 };
 
 struct ObserverConfig {
-  uint32_t heartbeat_timeout_ms = 0;   // 0: 3 x the node's heartbeat interval (seen), min 1000
+  uint32_t heartbeat_timeout_ms = 0;  // 0: 3 x the node's heartbeat interval (seen), min 1000
   uint32_t sdo_timeout_ms = 500;
-  uint32_t sdo_quiet_ms = 300;         // wait for another master's SDO traffic to end
-  uint32_t retry_initial_ms = 200;     // backoff after a failed discovery, doubling ...
-  uint32_t retry_max_ms = 10'000;      // ... up to this
-  uint32_t health_period_ms = 1000;    // NodeHealth republished at least this often
+  uint32_t sdo_quiet_ms = 300;       // wait for another master's SDO traffic to end
+  uint32_t retry_initial_ms = 200;   // backoff after a failed discovery, doubling ...
+  uint32_t retry_max_ms = 10'000;    // ... up to this
+  uint32_t health_period_ms = 1000;  // NodeHealth republished at least this often
   // After a failed SDO read (a collision with another master, or the confusion it leaves)
   // the wait for quiet gets a random extra of up to this much, so two bridges on one bus
   // that saw the same boot-up do not collide again and again in lockstep.
   uint32_t collision_jitter_ms = 200;
-  uint32_t random_seed = 0;            // 0: taken from the observer's address (differs per process)
+  uint32_t random_seed = 0;  // 0: taken from the observer's address (differs per process)
   // The socket delivers the bridge's own frames back to it (CAN_RAW_RECV_OWN_MSGS, or a
   // second socket for sending). Then a request equal to one just sent is taken for the
   // echo. Off by default: with SocketCAN's defaults an identical request is another

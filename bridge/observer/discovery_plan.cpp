@@ -29,8 +29,9 @@ constexpr uint16_t kSnapshotOffsets[] = {0x01, 0x18, 0x19, 0x05, 0x06};
 constexpr uint8_t kSnapshotItems = std::size(kSnapshotOffsets);
 // What the snapshot reads of each CiA 402 axis (axis 1 indices), in this order.
 constexpr uint16_t kDriveSnapshotObjects[] = {
-    cia402::obj::kStatusword,     cia402::obj::kModesOfOperationDisplay, cia402::obj::kPositionActual,
-    cia402::obj::kVelocityActual, cia402::obj::kFollowingErrorActual,    cia402::obj::kErrorCode};
+    cia402::obj::kStatusword,           cia402::obj::kModesOfOperationDisplay,
+    cia402::obj::kPositionActual,       cia402::obj::kVelocityActual,
+    cia402::obj::kFollowingErrorActual, cia402::obj::kErrorCode};
 constexpr uint8_t kDriveSnapshotItems = std::size(kDriveSnapshotObjects);
 
 // Little-endian unsigned of exactly `size` bytes; a value of another size is a device
@@ -89,8 +90,7 @@ SdoRead DiscoveryPlan::next() const {
     case Phase::TpdoComm: return {static_cast<uint16_t>(kTpdoComm + k_), 1};
     case Phase::TpdoCount: return {static_cast<uint16_t>(kTpdoMap + k_), 0};
     case Phase::TpdoEntry: return {static_cast<uint16_t>(kTpdoMap + k_), entry_};
-    case Phase::Snapshot:
-      return {horner::obj::index(k_, kSnapshotOffsets[entry_]), 0};
+    case Phase::Snapshot: return {horner::obj::index(k_, kSnapshotOffsets[entry_]), 0};
     case Phase::DriveSnapshot: return {cia402::obj::index(k_, kDriveSnapshotObjects[entry_]), 0};
     case Phase::Done: break;
   }
@@ -113,7 +113,8 @@ std::string DiscoveryPlan::device_name(const od::Bytes& d) {
   size_t n = std::min<size_t>(d.size(), kMaxNameLength);
   n = static_cast<size_t>(std::find(d.begin(), d.begin() + static_cast<long>(n), 0) - d.begin());
   std::string name;
-  for (size_t i = 0; i < n; ++i) name += d[i] >= 0x20 && d[i] <= 0x7E ? static_cast<char>(d[i]) : '?';
+  for (size_t i = 0; i < n; ++i)
+    name += d[i] >= 0x20 && d[i] <= 0x7E ? static_cast<char>(d[i]) : '?';
   return name;
 }
 
@@ -151,9 +152,7 @@ void DiscoveryPlan::value(const od::Bytes& d) {
       }
       if (++k_ > 4) phase_ = Phase::Name;
       return;
-    case Phase::Name:
-      info_.device_name = device_name(d);
-      return after_name();
+    case Phase::Name: info_.device_name = device_name(d); return after_name();
     case Phase::AxisProbe:
       info_.axes = static_cast<uint8_t>(k_ + 1);
       if (++k_ >= kMaxAxes) after_axes();
@@ -193,21 +192,15 @@ void DiscoveryPlan::value(const od::Bytes& d) {
         next_tpdo();
       }
       return;
-    case Phase::Snapshot:
-      snapshot_value(d);
-      return next_snapshot();
-    case Phase::DriveSnapshot:
-      drive_snapshot_value(d);
-      return next_drive_snapshot();
+    case Phase::Snapshot: snapshot_value(d); return next_snapshot();
+    case Phase::DriveSnapshot: drive_snapshot_value(d); return next_drive_snapshot();
     case Phase::Done: return;
   }
 }
 
 void DiscoveryPlan::absent() {
   switch (phase_) {
-    case Phase::HeartbeatTime:
-      phase_ = Phase::DeviceType;
-      return;
+    case Phase::HeartbeatTime: phase_ = Phase::DeviceType; return;
     case Phase::DeviceType:
       phase_ = Phase::Identity;
       k_ = 1;
@@ -228,7 +221,7 @@ void DiscoveryPlan::absent() {
       return;
     case Phase::TpdoComm: return tpdos_done();  // no more TPDOs
     case Phase::TpdoCount:
-    case Phase::TpdoEntry: return next_tpdo();  // this TPDO's mapping unreadable: skipped
+    case Phase::TpdoEntry: return next_tpdo();     // this TPDO's mapping unreadable: skipped
     case Phase::Snapshot: return next_snapshot();  // e.g. no HP objects on this node
     case Phase::DriveSnapshot: return next_drive_snapshot();  // e.g. no 60F4h
     case Phase::Done: return;
@@ -336,7 +329,8 @@ void DiscoveryPlan::drive_snapshot_value(const od::Bytes& d) {
       if ((s.velocity_read = exact_u32(d, 4, v))) s.velocity_actual = static_cast<int32_t>(v);
       break;
     case cia402::obj::kFollowingErrorActual:
-      if ((s.following_error_read = exact_u32(d, 4, v))) s.following_error = static_cast<int32_t>(v);
+      if ((s.following_error_read = exact_u32(d, 4, v)))
+        s.following_error = static_cast<int32_t>(v);
       break;
     case cia402::obj::kErrorCode:
       if ((s.error_code_read = exact_u32(d, 2, v))) s.error_code = static_cast<uint16_t>(v);

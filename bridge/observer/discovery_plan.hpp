@@ -90,12 +90,12 @@ class DiscoveryPlan {
   void next_drive_snapshot();
 
   Phase phase_ = Phase::HeartbeatTime;
-  uint16_t k_ = 0;     // identity sub, axis or TPDO number, by phase
+  uint16_t k_ = 0;  // identity sub, axis or TPDO number, by phase
   // (entry_ is also the item of the axis being read in the snapshot phases)
-  uint8_t entry_ = 0;  // mapping entry being read (1-based)
-  uint8_t count_ = 0;  // mapping entries of TPDO k_
+  uint8_t entry_ = 0;            // mapping entry being read (1-based)
+  uint8_t count_ = 0;            // mapping entries of TPDO k_
   bool snapshot_wanted_ = true;  // not after a remap: the values are known then
-  TpdoInfo pending_;   // the TPDO being read
+  TpdoInfo pending_;             // the TPDO being read
   std::vector<TpdoInfo> new_tpdos_;
   NodeInfo info_;
 };

@@ -1,6 +1,7 @@
 // EMCY (CiA 301 7.2.7.3.1) into an EmergencySample with text: the code and error
 // register in CiA 301 words, and for a stepnode's axis errors (0xFF01..0xFF08) the
-// module's error bits by name. What the node sends (node/profiles/horner/service.cpp, on_axis_event):
+// module's error bits by name. What the node sends (node/profiles/horner/service.cpp,
+// on_axis_event):
 //   bytes 0-1 code 0xFF00 + axis (1-based), byte 2 error register,
 //   manufacturer[0] the error bits that just latched (%I1..%I8),
 //   manufacturer[1..2] the whole status word (little-endian), manufacturer[3] the axis.

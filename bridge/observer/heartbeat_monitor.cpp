@@ -28,7 +28,8 @@ HeartbeatMonitor::Change HeartbeatMonitor::on_heartbeat(NodeState state, uint64_
   // The interval is measured between heartbeats only: boot-up to the first heartbeat is
   // not a producer period.
   const bool heartbeat = state != NodeState::BootUp;
-  if (heartbeat && last_was_heartbeat && !c.was_lost && now_us > last_us_) interval_us_ = now_us - last_us_;
+  if (heartbeat && last_was_heartbeat && !c.was_lost && now_us > last_us_)
+    interval_us_ = now_us - last_us_;
   if (c.boot_up || c.was_lost) interval_us_ = 0;  // the period may have changed
   last_was_heartbeat = heartbeat;
   last_us_ = now_us;

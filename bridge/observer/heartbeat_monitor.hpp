@@ -17,8 +17,8 @@ class HeartbeatMonitor {
  public:
   struct Change {
     bool state_changed = false;
-    bool boot_up = false;     // 0x00: the node (re)started, its settings are back to stored
-    bool was_lost = false;    // a heartbeat after the verdict "lost"
+    bool boot_up = false;   // 0x00: the node (re)started, its settings are back to stored
+    bool was_lost = false;  // a heartbeat after the verdict "lost"
   };
 
   Change on_heartbeat(NodeState state, uint64_t now_us);
@@ -27,7 +27,8 @@ class HeartbeatMonitor {
   // 1000 ms. 0 = no verdict possible (the node produces no heartbeat).
   uint64_t timeout_us(uint32_t configured_ms, uint16_t producer_ms, bool producer_known) const;
   // True once, when the node goes from alive to lost.
-  bool check_lost(uint64_t now_us, uint32_t configured_ms, uint16_t producer_ms, bool producer_known);
+  bool check_lost(uint64_t now_us, uint32_t configured_ms, uint16_t producer_ms,
+                  bool producer_known);
 
   // The node's period changed (a master wrote its 0x1017): measure it afresh.
   void forget_interval() {
@@ -43,8 +44,8 @@ class HeartbeatMonitor {
  private:
   NodeState state_ = NodeState::Unknown;
   uint64_t last_us_ = 0;
-  uint64_t interval_us_ = 0;       // 0 = not measured yet
-  bool last_was_heartbeat = false; // the previous message was a heartbeat (not a boot-up)
+  uint64_t interval_us_ = 0;        // 0 = not measured yet
+  bool last_was_heartbeat = false;  // the previous message was a heartbeat (not a boot-up)
   bool seen_ = false;
 };
 

@@ -9,7 +9,8 @@ namespace stepnode::bridge {
 class RetryBackoff {
  public:
   RetryBackoff(uint32_t initial_ms, uint32_t max_ms)
-      : initial_us_(uint64_t{initial_ms} * 1000), max_us_(std::max(uint64_t{max_ms} * 1000, initial_us_)) {}
+      : initial_us_(uint64_t{initial_ms} * 1000),
+        max_us_(std::max(uint64_t{max_ms} * 1000, initial_us_)) {}
 
   void failed(uint64_t now_us) {
     delay_us_ = delay_us_ == 0 ? initial_us_ : std::min(delay_us_ * 2, max_us_);

@@ -67,8 +67,9 @@ SdoChannel::FrameEvent SdoChannel::on_request(const od::CanFrame& f, uint64_t no
 void SdoChannel::note_download_request(const od::CanFrame& f) {
   if (f.dlc < 4) return;
   const uint8_t b0 = f.data[0];
-  const bool initiate_download = command(b0) == ccs::kDownloadInitiate ||
-                                 (command(b0) == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate);
+  const bool initiate_download =
+      command(b0) == ccs::kDownloadInitiate ||
+      (command(b0) == ccs::kBlockDownload && (b0 & 0x01) == kBlockInitiate);
   if (initiate_download) {
     download_pending_ = true;
     download_index_ = od::get_u16(&f.data[1]);

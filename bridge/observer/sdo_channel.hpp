@@ -63,7 +63,8 @@ class SdoChannel {
   void remember_sent(const std::vector<od::CanFrame>& out, size_t from, uint64_t now_us);
   bool is_own_echo(const od::CanFrame& frame, uint64_t now_us);
   FrameEvent on_request(const od::CanFrame& frame, uint64_t now_us);
-  FrameEvent on_response(const od::CanFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
+  FrameEvent on_response(const od::CanFrame& frame, uint64_t now_us,
+                         std::vector<od::CanFrame>& out);
   void note_download_request(const od::CanFrame& frame);
   std::optional<uint16_t> confirmed_download(const od::CanFrame& frame);
   void new_client();

@@ -12,11 +12,12 @@ constexpr uint16_t kDoneCodeOffset = 0x18;
 constexpr uint16_t kHpErrorOffset = 0x19;
 constexpr uint16_t kDriveFirst = 0x6000;
 constexpr uint16_t kDriveLast = kDriveFirst + cia402::kAxisOffset * kMaxAxes - 1;  // 0x9FFF
-constexpr uint16_t kStatuswordFault = 1u << 3;  // 6041h bit 3
+constexpr uint16_t kStatuswordFault = 1u << 3;                                     // 6041h bit 3
 
 MappedAxisField drive_field_of(const od::MappedEntry& e) {
   const auto axis = static_cast<uint8_t>((e.index - kDriveFirst) / cia402::kAxisOffset);
-  const auto base = static_cast<uint16_t>(kDriveFirst + (e.index - kDriveFirst) % cia402::kAxisOffset);
+  const auto base =
+      static_cast<uint16_t>(kDriveFirst + (e.index - kDriveFirst) % cia402::kAxisOffset);
   using namespace cia402::obj;
   switch (base) {
     case kStatusword: return {axis, AxisField::DriveStatusword};
@@ -83,9 +84,11 @@ void TpdoDecoder::install(uint8_t node, const NodeInfo& info) {
     for (const od::MappedEntry& e : t.mapping) {
       const MappedAxisField m = axis_field_of(e);
       const unsigned axes = is_drive_field(m.field) ? info.drive_axes : info.axes;
-      if (m.field != AxisField::None && m.axis < axes && e.bits > 0 && c.field_count < c.fields.size()) {
+      if (m.field != AxisField::None && m.axis < axes && e.bits > 0 &&
+          c.field_count < c.fields.size()) {
         c.fields[c.field_count++] = Field{static_cast<uint8_t>(offset), e.bits, m.axis, m.field};
-        if (m.field == AxisField::DriveErrorCode) n.error_code_mapped |= static_cast<uint8_t>(1u << m.axis);
+        if (m.field == AxisField::DriveErrorCode)
+          n.error_code_mapped |= static_cast<uint8_t>(1u << m.axis);
       }
       offset += e.bits;
     }
@@ -198,7 +201,8 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
   return Result::Decoded;
 }
 
-uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t v, unsigned bits) {
+uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t v,
+                               unsigned bits) {
   DriveAxisState& d = n.drives[axis];
   const auto i32 = [&] { return static_cast<int32_t>(sign_extend(v, bits)); };
   switch (field) {
@@ -206,7 +210,8 @@ uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uin
       const auto s = static_cast<uint16_t>(v);
       // A fault came or was reset: 603Fh changed with it (unless a TPDO brings it anyway).
       const uint16_t fault_edge = (d.statusword_known ? d.statusword ^ s : s) & kStatuswordFault;
-      if (fault_edge && !(n.error_code_mapped & (1u << axis))) n.error_code_stale |= static_cast<uint8_t>(1u << axis);
+      if (fault_edge && !(n.error_code_mapped & (1u << axis)))
+        n.error_code_stale |= static_cast<uint8_t>(1u << axis);
       d.statusword = s;
       d.statusword_known = true;
       return kDriveStatusword;
@@ -222,7 +227,8 @@ uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uin
   }
 }
 
-void TpdoDecoder::apply_read(uint8_t node, uint16_t index, uint8_t sub, const od::Bytes& data, uint64_t can_time_ns) {
+void TpdoDecoder::apply_read(uint8_t node, uint16_t index, uint8_t sub, const od::Bytes& data,
+                             uint64_t can_time_ns) {
   if (node == 0 || node >= kNodeIds || data.empty() || data.size() > 4) return;
   NodeTpdos& n = nodes_[node];
   const auto bits = static_cast<uint8_t>(8 * data.size());
@@ -232,7 +238,8 @@ void TpdoDecoder::apply_read(uint8_t node, uint16_t index, uint8_t sub, const od
   for (size_t i = 0; i < data.size(); ++i) v |= uint64_t{data[i]} << (8 * i);
   set_drive(n, m.axis, m.field, v, bits);
   // (the stale mark a statusword read could set is not wanted: this is already a read)
-  if (m.field == AxisField::DriveStatusword) n.error_code_stale &= static_cast<uint8_t>(~(1u << m.axis));
+  if (m.field == AxisField::DriveStatusword)
+    n.error_code_stale &= static_cast<uint8_t>(~(1u << m.axis));
   publish_drive(node, m.axis, can_time_ns);
 }
 

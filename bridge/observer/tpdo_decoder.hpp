@@ -69,7 +69,8 @@ class TpdoDecoder {
   // A value read over SDO after discovery (the observer's refresh of 603Fh): applied and
   // published as a TPDO carrying it would be. Objects that are no drive field of an
   // installed CiA 402 axis are ignored.
-  void apply_read(uint8_t node, uint16_t index, uint8_t sub, const od::Bytes& data, uint64_t can_time_ns);
+  void apply_read(uint8_t node, uint16_t index, uint8_t sub, const od::Bytes& data,
+                  uint64_t can_time_ns);
   // CiA 402 axes (bit per 0-based axis) whose 603Fh error code is worth reading over SDO:
   // the statusword's fault bit changed (a fault came or was reset) and no TPDO carries the
   // axis's 603Fh. The call clears them.
@@ -120,8 +121,12 @@ class TpdoDecoder {
   };
   // Bits of DriveAxisState::from_tpdo: which values a TPDO carried since forget().
   enum DriveBit : uint8_t {
-    kDriveStatusword = 1, kDriveMode = 2, kDrivePosition = 4, kDriveVelocity = 8,
-    kDriveFollowingError = 16, kDriveErrorCode = 32,
+    kDriveStatusword = 1,
+    kDriveMode = 2,
+    kDrivePosition = 4,
+    kDriveVelocity = 8,
+    kDriveFollowingError = 16,
+    kDriveErrorCode = 32,
   };
   struct DriveAxisState {
     uint8_t from_tpdo = 0;  // DriveBit: newer than any SDO snapshot
@@ -141,8 +146,8 @@ class TpdoDecoder {
     uint8_t error_code_stale = 0;   // see take_stale_error_codes()
   };
   struct Slot {
-    uint8_t node = 0;     // 0: no TPDO on this COB-ID
-    uint16_t tpdo = 0;    // index into NodeTpdos::tpdos
+    uint8_t node = 0;   // 0: no TPDO on this COB-ID
+    uint16_t tpdo = 0;  // index into NodeTpdos::tpdos
   };
 
   Result decode(Slot slot, const ObservedFrame& frame);

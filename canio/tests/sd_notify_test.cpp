@@ -20,14 +20,16 @@ namespace {
 // A bound AF_UNIX datagram socket: `name` is a path, or "@name" for the abstract namespace.
 class Listener {
  public:
-  explicit Listener(const std::string& name) : fd_(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0)) {
+  explicit Listener(const std::string& name)
+      : fd_(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0)) {
     sockaddr_un a{};
     a.sun_family = AF_UNIX;
     std::memcpy(a.sun_path, name.data(), name.size());
     socklen_t len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + name.size());
     if (name[0] == '@') a.sun_path[0] = '\0';
     else ++len;
-    if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), len) != 0) ADD_FAILURE() << "bind " << name << ": " << std::strerror(errno);
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), len) != 0)
+      ADD_FAILURE() << "bind " << name << ": " << std::strerror(errno);
   }
   ~Listener() { ::close(fd_); }
   // The next datagram within timeout_ms, or nothing.
@@ -115,7 +117,8 @@ TEST(SdNotify, WithoutNotifySocketEveryCallIsANoOp) {
 
 TEST(SdNotify, ANameThatIsNeitherAnAbsolutePathNorAbstractTurnsNotifyingOff) {
   EXPECT_FALSE(ServiceNotifier(ServiceNotifier::Settings{"relative/notify", 0}).enabled());
-  EXPECT_FALSE(ServiceNotifier(ServiceNotifier::Settings{"/" + std::string(200, 'x'), 0}).enabled());
+  EXPECT_FALSE(
+      ServiceNotifier(ServiceNotifier::Settings{"/" + std::string(200, 'x'), 0}).enabled());
 }
 
 TEST(SdNotify, AManagerThatIsGoneIsAFailedSendNotACrashOrABlock) {
@@ -154,7 +157,8 @@ TEST(SdNotify, TheWatchdogIsOnlyForTheProcessWatchdogPidNames) {
 TEST(SdNotify, AWatchdogUsecThatIsNotAPositiveNumberLeavesTheWatchdogOff) {
   for (const char* bad : {"", "0", "-5", "12abc", " 100", "99999999999999999999999"}) {
     Environment env("/run/notify", bad, nullptr);
-    EXPECT_EQ(ServiceNotifier::settings_from_environment(::getpid()).watchdog_usec, 0u) << "'" << bad << "'";
+    EXPECT_EQ(ServiceNotifier::settings_from_environment(::getpid()).watchdog_usec, 0u)
+        << "'" << bad << "'";
   }
 }
 

@@ -15,7 +15,8 @@ class TomlFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() /
-           ("stepnode-toml-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("stepnode-toml-" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
@@ -44,7 +45,8 @@ class TomlFileTest : public ::testing::Test {
 TEST_F(TomlFileTest, AMissingFileOrADirectoryCannotBeRead) {
   const std::string missing = (dir_ / "nope.toml").string();
   EXPECT_EQ(error_of([&] { TomlFile{missing}; }), "config " + missing + ": cannot read file");
-  EXPECT_EQ(error_of([&] { TomlFile{dir_.string()}; }), "config " + dir_.string() + ": cannot read file");
+  EXPECT_EQ(error_of([&] { TomlFile{dir_.string()}; }),
+            "config " + dir_.string() + ": cannot read file");
 }
 
 TEST_F(TomlFileTest, AParseErrorNamesTheFileAndTheLineOnOneLine) {
@@ -79,7 +81,8 @@ TEST_F(TomlFileTest, NoConversionsAndNoValueOutOfRange) {
 
 TEST_F(TomlFileTest, UnknownKeysAreRefusedByName) {
   TomlFile f(file("iface = \"can0\"\nspeed = 3\n"));
-  EXPECT_EQ(error_of([&] { f.refuse_unknown_keys({"iface"}); }), "config " + f.path() + ": speed: unknown key");
+  EXPECT_EQ(error_of([&] { f.refuse_unknown_keys({"iface"}); }),
+            "config " + f.path() + ": speed: unknown key");
   f.refuse_unknown_keys({"iface", "speed"});
 }
 

@@ -12,15 +12,17 @@ inline node::DeviceLayout layout_from(uint8_t selector) {
   l.axes = 1 + ((selector >> 3) & 3);
   l.horner = l.hp = l.user = l.cia402 = false;
   switch (selector & 7) {
-    case 0: l.horner = true; break;                                  // Horner registers only
-    case 1: l.hp = true; break;                                      // HP 44714A channels only
-    case 2: l.cia402 = true; break;                                  // a CiA 402 drive only
-    case 3: l.horner = l.hp = l.user = true; break;                  // the default device
-    case 4: l.horner = l.hp = l.user = l.cia402 = true; break;       // every profile
-    case 5: l.horner = l.hp = l.user = l.spm30_multiplexed = true;   // SPM30: 1 axis, 3 motors
-            l.axes = 1; break;
-    case 6: l.hp = l.cia402 = true; break;                           // two front ends per axis
-    default: l.user = true; break;                                   // the simulator and user objects
+    case 0: l.horner = true; break;                             // Horner registers only
+    case 1: l.hp = true; break;                                 // HP 44714A channels only
+    case 2: l.cia402 = true; break;                             // a CiA 402 drive only
+    case 3: l.horner = l.hp = l.user = true; break;             // the default device
+    case 4: l.horner = l.hp = l.user = l.cia402 = true; break;  // every profile
+    case 5:
+      l.horner = l.hp = l.user = l.spm30_multiplexed = true;  // SPM30: 1 axis, 3 motors
+      l.axes = 1;
+      break;
+    case 6: l.hp = l.cia402 = true; break;  // two front ends per axis
+    default: l.user = true; break;          // the simulator and user objects
   }
   return l;
 }

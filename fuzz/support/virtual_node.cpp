@@ -11,8 +11,9 @@ namespace stepnode::fuzz {
 
 const std::filesystem::path& fresh_state_dir() {
   static const std::filesystem::path dir = [] {
-    std::filesystem::path base = std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm")
-                                                                           : std::filesystem::temp_directory_path();
+    std::filesystem::path base = std::filesystem::is_directory("/dev/shm")
+                                     ? std::filesystem::path("/dev/shm")
+                                     : std::filesystem::temp_directory_path();
     std::string tmpl = (base / "stepnode-fuzz-XXXXXX").string();
     if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp failed");
     static std::filesystem::path made = tmpl;
@@ -23,7 +24,8 @@ const std::filesystem::path& fresh_state_dir() {
     return made;
   }();
   std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) std::filesystem::remove_all(e.path(), ec);
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    std::filesystem::remove_all(e.path(), ec);
   return dir;
 }
 
@@ -54,7 +56,8 @@ void VirtualNode::advance_us(uint64_t us) {
 od::SdoResult VirtualNode::transfer(bool download, uint16_t index, uint8_t sub, od::Bytes data) {
   od::SdoClient client(od::cob::kSdoRx + id_, od::cob::kSdoTx + id_);
   std::vector<od::CanFrame> out;
-  if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, now_us, out);
+  if (download)
+    client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, now_us, out);
   else client.start_upload(index, sub, od::SdoClient::Mode::Auto, now_us, out);
   for (int round = 0; round < 64 && !client.done(); ++round) {
     if (out.empty()) {  // the node said nothing: let the client time out

@@ -71,8 +71,8 @@ class InstructionCounter {
 
 struct Bench {
   node::Device device;
-  uint32_t watch_id = 0;      // the answer being timed
-  uint64_t answered_ns = 0;   // when it was sent (0: not yet)
+  uint32_t watch_id = 0;     // the answer being timed
+  uint64_t answered_ns = 0;  // when it was sent (0: not yet)
   uint64_t frames_sent = 0;
   std::vector<sim::TracedStep> steps;
 
@@ -99,12 +99,14 @@ struct Figures {
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
 }
 
 // One timed frame: from the device being handed it to the watched answer leaving (or the
 // handler's end when `answer` is 0).
-void timed(Bench& b, const InstructionCounter& ic, const od::CanFrame& f, uint32_t answer, Figures& out) {
+void timed(Bench& b, const InstructionCounter& ic, const od::CanFrame& f, uint32_t answer,
+           Figures& out) {
   b.watch_id = answer;
   b.answered_ns = 0;
   const uint64_t i0 = ic.read_now();
@@ -119,8 +121,8 @@ void timed(Bench& b, const InstructionCounter& ic, const od::CanFrame& f, uint32
 
 void print(const char* what, const Figures& f, bool instructions) {
   std::vector<double> ins(f.instructions.begin(), f.instructions.end());
-  std::printf("%-28s n=%-6zu median %7.2f us  p99 %7.2f us", what, f.us.size(), percentile(f.us, 0.5),
-              percentile(f.us, 0.99));
+  std::printf("%-28s n=%-6zu median %7.2f us  p99 %7.2f us", what, f.us.size(),
+              percentile(f.us, 0.5), percentile(f.us, 0.99));
   if (instructions) std::printf("  median %8.0f instructions", percentile(ins, 0.5));
   std::printf("\n");
 }
@@ -181,8 +183,10 @@ int foreign_only(uint64_t n) {
 int main(int argc, char** argv) {
   unsigned iterations = 2000;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--iterations")) iterations = static_cast<unsigned>(std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--foreign-only")) return foreign_only(std::strtoull(argv[i + 1], nullptr, 10));
+    if (!std::strcmp(argv[i], "--iterations"))
+      iterations = static_cast<unsigned>(std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--foreign-only"))
+      return foreign_only(std::strtoull(argv[i + 1], nullptr, 10));
   }
   const InstructionCounter ic;
   Bench b(options());
@@ -205,8 +209,10 @@ int main(int argc, char** argv) {
     timed(b, ic, od::CanFrame(0x200 + kId, {0x80, 0x00, 1, 0, 0, 0}), 0, rpdo);
     if (b.steps.size() > before) ++first_step_in_handler;
     b.device.on_frame(od::CanFrame(0x200 + kId, {0x00, 0x00, 1, 0, 0, 0}), b.now_us());
-    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;) b.tick();
-    if (b.steps.size() > before)  // the step's own time on the node's clock, after the RPDO was handed over
+    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;)
+      b.tick();
+    if (b.steps.size() >
+        before)  // the step's own time on the node's clock, after the RPDO was handed over
       first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -
                               static_cast<double>(frame_us));
     pause_ticking(b, 200);
@@ -214,14 +220,19 @@ int main(int argc, char** argv) {
     pause_ticking(b, 200);
     timed(b, ic, others[i % others.size()], 0, foreign);
   }
-  std::printf("frame -> frame in-process, %u iterations, device of 3 axes (Horner, HP, user), node %u operational\n",
-              iterations, kId);
+  std::printf(
+      "frame -> frame in-process, %u iterations, device of 3 axes (Horner, HP, user), node %u "
+      "operational\n",
+      iterations, kId);
   print("SYNC -> synchronous TPDO", sync, ic.works());
   print("RPDO handled (Move Rel +1)", rpdo, ic.works());
-  print("RPDO -> first step's time", first_step, false);  // the module model: DIR setup, first period
-  std::printf("%-28s %u of %zu taken within the RPDO's handler\n", "  first step", first_step_in_handler, rpdo.us.size());
+  print("RPDO -> first step's time", first_step,
+        false);  // the module model: DIR setup, first period
+  std::printf("%-28s %u of %zu taken within the RPDO's handler\n", "  first step",
+              first_step_in_handler, rpdo.us.size());
   print("SDO request -> response", sdo, ic.works());
   print("foreign frame (handled)", foreign, ic.works());
-  if (!ic.works()) std::printf("instructions: no perf events here; see the callgrind command in the source\n");
+  if (!ic.works())
+    std::printf("instructions: no perf events here; see the callgrind command in the source\n");
   return 0;
 }

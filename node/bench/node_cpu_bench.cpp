@@ -65,15 +65,18 @@ int main(int argc, char** argv) {
   using namespace horner::obj;
   for (unsigned a = 0; a < 3; ++a) {
     uint16_t p = index(a, kProfile);
-    write(od, p, horner::profile_sub::kVelocityDivisor, od::encode<uint16_t>(20));  // 30 steps/s units
+    write(od, p, horner::profile_sub::kVelocityDivisor,
+          od::encode<uint16_t>(20));  // 30 steps/s units
     write(od, p, horner::profile_sub::kBaseVelocity, od::encode<uint16_t>(1));
-    write(od, p, horner::profile_sub::kRunningVelocity, od::encode<uint16_t>(8191));  // 245,730 steps/s
+    write(od, p, horner::profile_sub::kRunningVelocity,
+          od::encode<uint16_t>(8191));  // 245,730 steps/s
     write(od, p, horner::profile_sub::kAcceleration, od::encode<uint16_t>(100));
     write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
     write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
     write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 13));  // clear errors
     write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(0));
-    write(od, index(a, kCommandBits), 0, od::encode<uint16_t>(1u << 5));  // jog up: runs until released
+    write(od, index(a, kCommandBits), 0,
+          od::encode<uint16_t>(1u << 5));  // jog up: runs until released
   }
 
   if (virtual_seconds > 0) {
@@ -81,8 +84,9 @@ int main(int argc, char** argv) {
     while (t < end) device.on_tick(t += tick_us);
     int64_t steps = 0;
     for (unsigned a = 0; a < 3; ++a) steps += device.axes().axis(a).motor_position();
-    std::printf("virtual time         %.2f s\nsteps generated      %lld\nframes sent          %llu\n", virtual_seconds,
-                static_cast<long long>(steps), static_cast<unsigned long long>(frames));
+    std::printf(
+        "virtual time         %.2f s\nsteps generated      %lld\nframes sent          %llu\n",
+        virtual_seconds, static_cast<long long>(steps), static_cast<unsigned long long>(frames));
     return 0;
   }
   uint64_t start = now_us();
@@ -104,7 +108,8 @@ int main(int argc, char** argv) {
   double cpu = cpu_seconds() - cpu0;
   int64_t steps = 0;
   for (unsigned a = 0; a < 3; ++a) steps += device.axes().axis(a).motor_position();
-  std::printf("axes                 3 (jogging at %.0f steps/s each)\n", device.axes().axis(0).velocity());
+  std::printf("axes                 3 (jogging at %.0f steps/s each)\n",
+              device.axes().axis(0).velocity());
   std::printf("wall time            %.2f s, %llu ticks of %llu us\n", wall,
               static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(tick_us));
   std::printf("steps generated      %lld (%.0f steps/s in total)\n", static_cast<long long>(steps),

@@ -80,8 +80,10 @@ Args parse(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--mode")) a.mode = argv[i + 1];
     else if (!std::strcmp(argv[i], "--scenario")) a.scenario = argv[i + 1];
     else if (!std::strcmp(argv[i], "--seconds")) a.seconds = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--tick-us")) a.tick_us = std::strtoull(argv[i + 1], nullptr, 10);
-    else if (!std::strcmp(argv[i], "--horizon-us")) a.horizon_us = static_cast<uint32_t>(std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--tick-us"))
+      a.tick_us = std::strtoull(argv[i + 1], nullptr, 10);
+    else if (!std::strcmp(argv[i], "--horizon-us"))
+      a.horizon_us = static_cast<uint32_t>(std::atoi(argv[i + 1]));
   }
   return a;
 }
@@ -118,10 +120,12 @@ int main(int argc, char** argv) {
   const double wall = static_cast<double>(now_us() - start) / 1e6, cpu = cpu_seconds() - cpu0;
   int64_t steps = 0;
   for (unsigned a = 0; a < 3; ++a) steps += device.axes().axis(a).motor_position();
-  std::printf("mode %s, scenario %s, step horizon %u us\n", args.mode.c_str(), args.scenario.c_str(), args.horizon_us);
+  std::printf("mode %s, scenario %s, step horizon %u us\n", args.mode.c_str(),
+              args.scenario.c_str(), args.horizon_us);
   std::printf("wakeups_per_second   %.1f\n", static_cast<double>(wakeups) / wall);
   std::printf("cpu_share_percent    %.2f  (of one core)\n", 100.0 * cpu / wall);
-  std::printf("steps generated      %lld (%.0f steps/s in total), frames sent %llu\n", static_cast<long long>(steps),
-              static_cast<double>(steps) / wall, static_cast<unsigned long long>(frames));
+  std::printf("steps generated      %lld (%.0f steps/s in total), frames sent %llu\n",
+              static_cast<long long>(steps), static_cast<double>(steps) / wall,
+              static_cast<unsigned long long>(frames));
   return 0;
 }

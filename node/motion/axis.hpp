@@ -26,8 +26,8 @@ struct AxisConfig {
   // the difference exceeds the tolerance (6.3.2), origin source and limit qualification
   // are options (3.2.3).
   enum class Module { Spm30, Stp100 };
-  enum class HomeMethod { Normal, Simple };          // STP113 C1.2.1 / STP100 3.2.3
-  enum class OriginSource { HomeSwitch, Marker };    // STP100 3.2.3 (SPM30: marker = QUAD)
+  enum class HomeMethod { Normal, Simple };        // STP113 C1.2.1 / STP100 3.2.3
+  enum class OriginSource { HomeSwitch, Marker };  // STP100 3.2.3 (SPM30: marker = QUAD)
   Module module = Module::Spm30;
   HomeMethod home_method = HomeMethod::Normal;
   OriginSource origin_source = OriginSource::HomeSwitch;
@@ -39,8 +39,8 @@ struct AxisConfig {
   // Quadrature counts per encoder line: 1 as the ratio tables count a 1000-line encoder
   // (SPM30 5.3, STP100 Table 6.1), or 2 / 4 ("doubled or quadrupled", SPM30 5.1, STP100 6.2.1).
   int64_t quadrature_decoding = 1;
-  bool stall_detection = false;    // STP100 6.3.3 "Enable Stall Detection" (STP100 model only)
-  bool indexed_moves = true;       // %Q11 is Move Indexed (STP113, STP100)
+  bool stall_detection = false;      // STP100 6.3.3 "Enable Stall Detection" (STP100 model only)
+  bool indexed_moves = true;         // %Q11 is Move Indexed (STP113, STP100)
   bool limit_started_moves = false;  // STP100 5.3.4: a move toward an active limit waits
   // A move too short for the running velocity cruises at STPCALC's peak (B1.3.6) instead of
   // turning at halfway (SPM30 3.4.5): STPCALC's figures rather than the module's motion.
@@ -98,7 +98,9 @@ class Axis final : public FrontEnd, public AxisListener {
   std::function<void(const AxisEvent&)> on_event;
 
   // FrontEnd: the Horner jobs' rules.
-  Hooks hooks() const override { return {.deadline = job_ == Job::Home, .before_step = job_ == Job::Home}; }
+  Hooks hooks() const override {
+    return {.deadline = job_ == Job::Home, .before_step = job_ == Job::Home};
+  }
   void poll(Tick now) override;
   std::optional<Tick> deadline() const override;
   void at_deadline(Tick when) override;
@@ -122,10 +124,10 @@ class Axis final : public FrontEnd, public AxisListener {
   bool origin_active() const;
   // The rules the module model and the settings give (set_config).
   struct Rules {
-    bool stall_detection = false;     // SPM30 5.4 / STP100 6.3.3
+    bool stall_detection = false;      // SPM30 5.4 / STP100 6.3.3
     bool invalid_at_tolerance = true;  // SPM30 5.4 "reaches"; STP100 6.3.2 "exceeds"
-    bool marker_origin = false;       // STP100 3.2.3 option; SPM30 QUAD on axis 1
-    bool limit_qualified = false;     // STP100 3.2.3 option; SPM30 QUAD on axis 1
+    bool marker_origin = false;        // STP100 3.2.3 option; SPM30 QUAD on axis 1
+    bool limit_qualified = false;      // STP100 3.2.3 option; SPM30 QUAD on axis 1
   };
   static Rules rules_of(const AxisConfig& config);
   // Axis 1's encoder counts as the module decodes them (the motor port gives edges).
@@ -144,7 +146,8 @@ class Axis final : public FrontEnd, public AxisListener {
   void latched(uint16_t error_bits, bool was_moving, Tick when);
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);
   std::optional<RampSpec> ramp_from_words(Tick now, bool index_decel = false);
-  void start_move(int64_t distance, const RampSpec& ramp, Tick now, bool indexed, bool resume = false);
+  void start_move(int64_t distance, const RampSpec& ramp, Tick now, bool indexed,
+                  bool resume = false);
   // Positions are those the status words carry (SPM30 3.3): whether a move of `distance`
   // steps from here, and an indexed one's end after any index its window accepts, ends
   // inside them; whether the index words are inside the module model's ranges.
@@ -198,8 +201,8 @@ class Axis final : public FrontEnd, public AxisListener {
   // Stall detection (STP100 6.3.3): over a short window a jam shows at once, over a long
   // one a slipping motor is measured to within 0.1 % of the 10 % threshold.
   struct StallWindow {
-    int64_t steps = 0;          // commanded steps since the window began
-    int64_t counts_start = 0;   // encoder counts when it began
+    int64_t steps = 0;         // commanded steps since the window began
+    int64_t counts_start = 0;  // encoder counts when it began
   };
   StallWindow stall_short_, stall_long_;
   int stall_direction_ = 0;

@@ -24,7 +24,8 @@ std::optional<RampSpec> Axis::ramp_from_words(Tick now, bool index_decel) {
   }
 }
 
-bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance, Tick now) {
+bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64_t> distance,
+                        Tick now) {
   job_direction_ = direction;
   // DIR is set at the start of every move (STP100 5.3.5), by the core.
   const Tick dir_setup = (config_.direction_setup_us * kClockHz + 999'999) / 1'000'000;  // at least
@@ -162,7 +163,8 @@ void Axis::jog(int direction, Tick now) {
   if (to_bound <= 0) return latch(status::kIllegalMove, now);
   job_ = Job::Jog;
   move_ramp_ = *ramp;
-  const int64_t ramp_down = static_cast<int64_t>(ramp->decel_phase(ramp->run_level) / ramp->phase_per_step) + 2;
+  const int64_t ramp_down =
+      static_cast<int64_t>(ramp->decel_phase(ramp->run_level) / ramp->phase_per_step) + 2;
   jog_end_from_.reset();
   if (to_bound <= ramp_down) {
     start_motion(*ramp, direction, to_bound, now);
@@ -191,7 +193,8 @@ bool Axis::index_words_legal() const {
   // SPM30 C1.3.4 (STP113): 0..+8,388,607; STP100 table 4.1: 1..16,777,215.
   const bool stp100 = config_.module == AxisConfig::Module::Stp100;
   const uint32_t low = stp100 ? 1 : 0, high = stp100 ? 16'777'215 : kPositionMax;
-  for (uint32_t word : {words_.index_destination, words_.index_window_open, words_.index_window_close})
+  for (uint32_t word :
+       {words_.index_destination, words_.index_window_open, words_.index_window_close})
     if (word < low || word > high) return false;
   return true;
 }
@@ -226,7 +229,8 @@ void Axis::resume_move(Tick now) {
   if (!resumable_) return latch(status::kIllegalMove, now);
   resumable_ = false;
   // From where it left off, toward the original target, with the original ramp.
-  start_move((move_target_steps_ - move_done_steps_) * job_direction_, move_ramp_, now, move_indexed_,
+  start_move((move_target_steps_ - move_done_steps_) * job_direction_, move_ramp_, now,
+             move_indexed_,
              /*resume=*/true);
 }
 
@@ -243,20 +247,22 @@ void Axis::write_commands(uint16_t bits, Tick now) {
     core_.stop(now);
 
   uint16_t candidates = rising & static_cast<uint16_t>(~command::kRepeatMove);  // %Q12 is a level
-  if (!config_.indexed_moves) candidates &= static_cast<uint16_t>(~command::kMoveIndexed);  // future use
-  if (core_.motors() < 2) candidates &= static_cast<uint16_t>(~(command::kSelectAxis2 | command::kSelectAxis3));
+  if (!config_.indexed_moves)
+    candidates &= static_cast<uint16_t>(~command::kMoveIndexed);  // future use
+  if (core_.motors() < 2)
+    candidates &= static_cast<uint16_t>(~(command::kSelectAxis2 | command::kSelectAxis3));
   if (core_.motors() < 3) candidates &= static_cast<uint16_t>(~command::kSelectAxis3);
   // While an error is latched only Clear Errors and the two stops are obeyed (SPM30 4: their
   // "Status Bits Required: None"; a lost master's ramp, or another front end's job, can
   // still be stopped); while moving (any front end's job) only the stops.
   if (errors_) candidates &= command::kClearErrors | command::kDecelStop | command::kImmediateStop;
-  else if (moving())
-    candidates &= command::kDecelStop | command::kImmediateStop;
+  else if (moving()) candidates &= command::kDecelStop | command::kImmediateStop;
   if (candidates) {
     // Several at once: the highest %Q wins (SPM30 3.2).
     uint16_t bit = std::bit_floor(candidates);
     // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability.
-    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move)) resumable_ = false;
+    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move))
+      resumable_ = false;
     execute(bit, now);
   }
   notify(AxisEvent::StatusChanged);

@@ -33,8 +33,8 @@ void AxisCore::power_up(Tick now) {
   selected_ = 0;
 }
 
-bool AxisCore::start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now,
-                     Tick dir_setup) {
+bool AxisCore::start(FrontEnd& by, const RampSpec& ramp, int direction,
+                     std::optional<int64_t> steps, Tick now, Tick dir_setup) {
   if (owner_ != &by && busy()) return false;  // one job at a time
   const bool first = owner_ != &by;
   set_owner(&by);  // the hooks of this motion (a homing's next stage may differ)
@@ -45,7 +45,8 @@ bool AxisCore::start(FrontEnd& by, const RampSpec& ramp, int direction, std::opt
     // setup time left since DIR changed moves the whole motion later, by the difference.
     const Tick ready = dir_changed_at_ + dir_setup;
     const std::optional<Tick> first_step = generator_.peek();
-    if (first_step && *first_step < ready) generator_.start(ramp, now + (ready - *first_step), direction, steps);
+    if (first_step && *first_step < ready)
+      generator_.start(ramp, now + (ready - *first_step), direction, steps);
   }
   replan(now);
   if (first)

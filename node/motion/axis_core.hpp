@@ -47,7 +47,8 @@ class FrontEnd {
   // How the job's step leaves the outputs (HP PULSE SD|SS). It may be asked ahead of the
   // step's time (a port with a horizon) and for steps that are taken back: no side effects.
   virtual OutputPulse pulse(const Step& step) const {
-    return OutputPulse{.step_direction = true, .ndir_level = step.direction > 0, .ndir_positive_level = true};
+    return OutputPulse{
+        .step_direction = true, .ndir_level = step.direction > 0, .ndir_positive_level = true};
   }
   // The step went out as pulse(step) said (when its time came).
   virtual void pulse_sent(const Step& step) { (void)step; }
@@ -78,14 +79,26 @@ class AxisListener {
   // before the owner's after_step, while the listener watches steps (`watch_steps`).
   virtual void step_taken(const Step& step) { (void)step; }
   // A job began (its first motion or, for a waiting job, its claim).
-  virtual void job_started(const FrontEnd& owner, Tick when) { (void)owner; (void)when; }
+  virtual void job_started(const FrontEnd& owner, Tick when) {
+    (void)owner;
+    (void)when;
+  }
   // A front end halted its own job (no ramp, no motion_ended).
-  virtual void job_halted(const FrontEnd& owner, Tick when) { (void)owner; (void)when; }
+  virtual void job_halted(const FrontEnd& owner, Tick when) {
+    (void)owner;
+    (void)when;
+  }
   // The e-stop ended the motion (`was_moving`: steps were going out).
-  virtual void emergency_stop(Tick when, bool was_moving) { (void)when; (void)was_moving; }
+  virtual void emergency_stop(Tick when, bool was_moving) {
+    (void)when;
+    (void)was_moving;
+  }
   // An input of motor `motor` changed (the port's edge, applied in time order between the
   // steps it fell between), while the listener watches inputs (`watch_inputs`).
-  virtual void input_changed(unsigned motor, const InputEdge& edge) { (void)motor; (void)edge; }
+  virtual void input_changed(unsigned motor, const InputEdge& edge) {
+    (void)motor;
+    (void)edge;
+  }
   // The end of every advance_to (statuses that follow the motion are published here).
   virtual void advanced(Tick now) { (void)now; }
 };
@@ -112,8 +125,8 @@ class AxisCore {
   // end's job runs) or the next of the same job (homing's back-off, a repeated move).
   // `dir_setup`: the first step falls at least that long after the DIR output last changed
   // (the Horner modules' direction output setup time); the motion begins later if needed.
-  bool start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick now,
-             Tick dir_setup = 0);
+  bool start(FrontEnd& by, const RampSpec& ramp, int direction, std::optional<int64_t> steps,
+             Tick now, Tick dir_setup = 0);
   // A job that waits before its first motion (FrontEnd::poll); `start` ends the wait.
   bool claim(FrontEnd& by, Tick now);
   bool waiting() const { return waiting_; }
@@ -188,7 +201,9 @@ class AxisCore {
   void select(unsigned n) { selected_ = n; }
 
   // `self`: the front end the listener is (its own jobs' steps go to its after_step only).
-  void listen(AxisListener& listener, const FrontEnd* self = nullptr) { listeners_.push_back({&listener, self}); }
+  void listen(AxisListener& listener, const FrontEnd* self = nullptr) {
+    listeners_.push_back({&listener, self});
+  }
   // Whether `listener` is given every step (step_taken); off, a step costs it nothing.
   void watch_steps(const AxisListener& listener, bool on);
   // Whether `listener` is given every input edge (input_changed).

@@ -25,14 +25,17 @@ int64_t Axis::encoder_counts() const {
 
 int32_t Axis::encoder_position() const {
   // The encoder belongs to the first motor (SPM30 3.3.2: axis 1's, whatever is selected).
-  if (config_.encoder == EncoderKind::None) return core_.selected() == 0 ? core_.position() : saved_[0].position;
+  if (config_.encoder == EncoderKind::None)
+    return core_.selected() == 0 ? core_.position() : saved_[0].position;
   int64_t steps = floor_div(encoder_counts() * config_.encoder_multiplier,
                             std::max<int64_t>(config_.encoder_divisor, 1));
   return static_cast<int32_t>(encoder_offset_ + steps);
 }
 
 void Axis::check_position_valid() {
-  if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 || core_.selected() != 0) return;
+  if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 ||
+      core_.selected() != 0)
+    return;
   int64_t difference = std::llabs(int64_t{core_.position()} - encoder_position());
   // SPM30 5.4: "reaches encoder tolerance"; STP100 6.3.2: "exceeds the configured Encoder
   // Tolerance value".

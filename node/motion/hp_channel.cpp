@@ -54,7 +54,8 @@ Error Channel::accept(Error e) {
 
 Conflict Channel::profile(const Profile& given, Tick now, Error* error) {
   (void)now;
-  Error e = (blocking_ || run_ != Run::Idle || start_at_ || core_.busy()) ? Error::AccessoryBusy : Error::None;
+  Error e = (blocking_ || run_ != Run::Idle || start_at_ || core_.busy()) ? Error::AccessoryBusy
+                                                                          : Error::None;
   if (error) *error = accept(e);
   if (e != Error::None) return Conflict::None;
   // "The scale factor of the PSCALE command affects the PROFILE ... commands" (3-9): FREQ
@@ -84,9 +85,9 @@ Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
   if (mode == StandbyMode::On && moving && !pulse_train()) return accept(Error::AccessoryBusy);
   standby_ = mode;
   standby_high_ = sense_high;
-  if (mode == StandbyMode::Off) powered_ = true;       // OFF = apply power
+  if (mode == StandbyMode::Off) powered_ = true;               // OFF = apply power
   else if (mode == StandbyMode::On) powered_ = pulse_train();  // ON = remove power
-  else if (!moving && powered_) idle_since_ = now;     // AUTO: off a second after idle
+  else if (!moving && powered_) idle_since_ = now;             // AUTO: off a second after idle
   return accept(Error::None);
 }
 
@@ -136,7 +137,8 @@ Done Channel::done() const {
 Error Channel::test(uint8_t& failed) {
   // Not while pulses go out or a command waits for its trigger (error 89, "A move is in
   // progress"): a self test is of an idle module.
-  if (blocking_ || armed_ || run_ != Run::Idle || start_at_ || core_.busy()) return accept(Error::AccessoryBusy);
+  if (blocking_ || armed_ || run_ != Run::Idle || start_at_ || core_.busy())
+    return accept(Error::AccessoryBusy);
   failed = run_self_test();
   return accept(Error::None);
 }

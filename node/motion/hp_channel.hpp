@@ -54,11 +54,11 @@ class Channel final : public FrontEnd, public AxisListener {
   // `failed` gets the failed checks (0: passed). The settings stay as they were.
   Error test(uint8_t& failed);
   // ---- interrupts
-  void enable_intr();   // clears, then enables (Command Summary: ENABLE INTR)
+  void enable_intr();  // clears, then enables (Command Summary: ENABLE INTR)
   void disable_intr() { intr_enabled_ = false; }
 
   // ---- inputs from outside the channel
-  void sync(Tick now);            // the CANopen SYNC: TRIG SYS
+  void sync(Tick now);             // the CANopen SYNC: TRIG SYS
   void chan0_triggered(Tick now);  // channel 0 of this node was triggered: TRIG CHAN0
   void set_test_jumper(bool set) { test_jumper_ = set; }
   // Starts what is due (DELAY, STANDBY AUTO power-off) and brings the axis to `now`.
@@ -109,8 +109,8 @@ class Channel final : public FrontEnd, public AxisListener {
   enum class Action { None, Move, Sustain };
   struct Pending {
     Action action = Action::None;
-    int64_t steps = 0;      // MOVE
-    double rate = 0;        // SUSTAIN: steps/s (FREQ) or width s (WIDTH), signed
+    int64_t steps = 0;  // MOVE
+    double rate = 0;    // SUSTAIN: steps/s (FREQ) or width s (WIDTH), signed
   };
   enum class Run { Idle, Move, Sustain, SustainStopping };
 
@@ -131,7 +131,9 @@ class Channel final : public FrontEnd, public AxisListener {
   bool limit_active(int direction) const;
   bool halt_active() const;
   // A WIDTH-mode SUSTAIN triggered and not ended: general purpose pulse output (3-23).
-  bool pulse_train() const { return profile_.mode == ProfileMode::Width && (run_ != Run::Idle || start_at_); }
+  bool pulse_train() const {
+    return profile_.mode == ProfileMode::Width && (run_ != Run::Idle || start_at_);
+  }
   // The HALT input changed (its edge, input_changed): a halt when it now reads active.
   void halt_input_changed(Tick now);
   // FrontEnd: the channel's own jobs.
@@ -167,22 +169,22 @@ class Channel final : public FrontEnd, public AxisListener {
   bool test_jumper_ = false;
   // State.
   Pending pending_;
-  bool armed_ = false;               // a MOVE/SUSTAIN waits for its trigger
-  bool locked_ = false;              // ...given without NOWAIT: no trigger reaches it (3-13)
-  std::optional<Tick> start_at_;     // triggered, starting after DELAY
-  bool blocking_ = false;            // a command without NOWAIT has not finished
+  bool armed_ = false;            // a MOVE/SUSTAIN waits for its trigger
+  bool locked_ = false;           // ...given without NOWAIT: no trigger reaches it (3-13)
+  std::optional<Tick> start_at_;  // triggered, starting after DELAY
+  bool blocking_ = false;         // a command without NOWAIT has not finished
   Run run_ = Run::Idle;
   int direction_ = +1;
   int64_t move_steps_ = 0, steps_taken_ = 0;
-  double sustain_rate_ = 0;          // steps/s (FREQ) the SUSTAIN asked for, clamped
+  double sustain_rate_ = 0;  // steps/s (FREQ) the SUSTAIN asked for, clamped
   bool sustain_reached_ = false;
   Done outcome_ = Done::Completed;
   Error last_error_ = Error::None;
   Conflict last_conflict_ = Conflict::None;
   bool intr_enabled_ = false;
   uint8_t events_ = 0;
-  bool powered_ = false;             // motor power (STANDBY): AUTO starts unpowered
-  std::optional<Tick> idle_since_;   // STANDBY AUTO: powered down 1 s after the last move
+  bool powered_ = false;            // motor power (STANDBY): AUTO starts unpowered
+  std::optional<Tick> idle_since_;  // STANDBY AUTO: powered down 1 s after the last move
   std::optional<Tick> trigger_time_, first_step_;
   bool awaiting_first_step_ = false;
   // WIDTH mode: the width ramps from width_from_ at width_since_ toward width_target_.

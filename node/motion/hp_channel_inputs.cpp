@@ -45,7 +45,10 @@ void Channel::halt_input_changed(Tick now) {
 
 void Channel::qindex(QIndexMode mode) {
   switch (mode) {
-    case QIndexMode::Off: q_waiting_for_index_ = false; q_frozen_ = false; break;
+    case QIndexMode::Off:
+      q_waiting_for_index_ = false;
+      q_frozen_ = false;
+      break;
     case QIndexMode::Once:
       // Reset now; counting begins on the first index pulse, later ones are ignored.
       q_offset_ = core_.motor().encoder_count();

@@ -12,7 +12,8 @@ constexpr Tick kStandbyAutoOffTicks = kClockHz;  // "a one second delay in power
 
 }  // namespace
 
-void Channel::start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at) {
+void Channel::start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps,
+                        Tick at) {
   core_.advance_to(at);
   core_.start(*this, ramp, direction, steps, at);
 }
@@ -111,7 +112,8 @@ void Channel::change_sustain_velocity(double target, Tick at) {
   // short of the rate, then hold the rate exactly on the new rate's grid.
   const double current = core_.generator().velocity();
   const double levels = target / level_hz;
-  const int64_t approach = std::max<int64_t>(1, static_cast<int64_t>(target < current ? std::ceil(levels) : std::floor(levels)));
+  const int64_t approach = std::max<int64_t>(
+      1, static_cast<int64_t>(target < current ? std::ceil(levels) : std::floor(levels)));
   core_.change_velocity(at, approach, fresh);
 }
 
@@ -143,8 +145,7 @@ void Channel::ended(bool completed, Tick at) {
     bool all = completed && steps_taken_ >= move_steps_;
     return end(all ? Done::Completed : Done::Halted, all ? intr::kMoveDone : intr::kHaltSwitch, at);
   }
-  if (run_ == Run::SustainStopping && completed)
-    return end(Done::Completed, intr::kMoveDone, at);
+  if (run_ == Run::SustainStopping && completed) return end(Done::Completed, intr::kMoveDone, at);
   // A running SUSTAIN ended by the e-stop, a Horner stop or a lost master: a halt.
   end(Done::Halted, intr::kHaltSwitch, at);
 }

@@ -8,7 +8,9 @@
 namespace stepnode::motion::hp {
 namespace {
 
-Tick seconds_to_ticks(double s) { return static_cast<Tick>(std::llround(s * static_cast<double>(kClockHz))); }
+Tick seconds_to_ticks(double s) {
+  return static_cast<Tick>(std::llround(s * static_cast<double>(kClockHz)));
+}
 
 }  // namespace
 
@@ -56,7 +58,8 @@ void Channel::replan_widths(Tick at) {
 }
 
 void Channel::width_advance(Tick now) {
-  if (profile_.mode != ProfileMode::Width || (run_ != Run::Sustain && run_ != Run::SustainStopping)) return;
+  if (profile_.mode != ProfileMode::Width || (run_ != Run::Sustain && run_ != Run::SustainStopping))
+    return;
   if (run_ == Run::Sustain && sustain_reached_) return;
   // The exact tick the width reaches its target.
   double span = std::fabs(width_target_ - width_from_);

@@ -14,25 +14,29 @@ Error Channel::check_can_move(bool width_allowed) const {
   if (test_jumper_) return Error::TestJumperSet;
   // Error 94: "Motor cannot move when powered down by STANDBY in the ON mode". A WIDTH-mode
   // SUSTAIN is pulse output, not a motor: there STBY follows the pulse train (3-29).
-  if (standby_ == StandbyMode::On && profile_.mode == ProfileMode::Freq) return Error::CannotMoveWhileStandbyOn;
+  if (standby_ == StandbyMode::On && profile_.mode == ProfileMode::Freq)
+    return Error::CannotMoveWhileStandbyOn;
   return Error::None;
 }
 
 Error Channel::move(double distance, bool absolute, bool nowait, Tick now) {
   // 89 first: a move in progress (this channel's, or the axis' under the Horner registers).
-  if (blocking_ || run_ != Run::Idle || start_at_ || core_.busy()) return accept(Error::AccessoryBusy);
+  if (blocking_ || run_ != Run::Idle || start_at_ || core_.busy())
+    return accept(Error::AccessoryBusy);
   if (Error e = check_can_move(false); e != Error::None) return accept(e);
-  int64_t steps = absolute ? position_.abs_steps(distance, core_.position()) : position_.rel_steps(distance);
+  int64_t steps =
+      absolute ? position_.abs_steps(distance, core_.position()) : position_.rel_steps(distance);
   // A move that would outlast the engine's 64-bit clock (2^31 pulses at a 2.5 µHz maximum:
   // 27 million years) is refused: its deceleration tick overflowed.
-  if (std::fabs(static_cast<double>(steps)) / std::max(profile_.max, kRateResolutionHz) > kLongestMoveS)
+  if (std::fabs(static_cast<double>(steps)) / std::max(profile_.max, kRateResolutionHz) >
+      kLongestMoveS)
     return Error::ValueOutOfRange;
   return arm(Pending{Action::Move, steps, 0}, nowait, now);
 }
 
 Error Channel::sustain(double value, bool nowait, Tick now) {
-  if (blocking_ || run_ == Run::Move || run_ == Run::SustainStopping || (start_at_ && pending_.action == Action::Move) ||
-      (core_.busy() && !core_.owned_by(*this)))
+  if (blocking_ || run_ == Run::Move || run_ == Run::SustainStopping ||
+      (start_at_ && pending_.action == Action::Move) || (core_.busy() && !core_.owned_by(*this)))
     return accept(Error::AccessoryBusy);
   if (value != 0)
     if (Error e = check_can_move(true); e != Error::None) return accept(e);

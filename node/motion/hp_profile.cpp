@@ -66,8 +66,10 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
     double off = std::fabs(d - std::round(d)) / d;
     if (off < best) best = off, run_levels = n;
   }
-  r.phase_per_step = std::llround(static_cast<double>(kClockHz) * static_cast<double>(run_levels) / target);
-  const double per_hz = static_cast<double>(r.phase_per_step) / static_cast<double>(kClockHz);  // levels per Hz
+  r.phase_per_step =
+      std::llround(static_cast<double>(kClockHz) * static_cast<double>(run_levels) / target);
+  const double per_hz =
+      static_cast<double>(r.phase_per_step) / static_cast<double>(kClockHz);  // levels per Hz
   r.run_level = run_hz > 0 ? run_levels : 0;
   r.base_level = std::min<int64_t>(r.run_level, std::llround(p.min * per_hz));
   if (p.slope > 0) {
@@ -81,7 +83,8 @@ RampSpec freq_ramp(const Profile& p, double run_hz) {
   r.decel_ticks_per_level = r.accel_ticks_per_level;
   int64_t one_step = std::llround(std::sqrt(2.0 * p.slope) * per_hz);
   // ... but never faster than the run rate: PROFILE FREQ 10 10 500 crept at 31.6 Hz.
-  r.min_creep_level = std::min(std::max<int64_t>({int64_t{1}, r.base_level, one_step}), std::max<int64_t>(1, r.run_level));
+  r.min_creep_level = std::min(std::max<int64_t>({int64_t{1}, r.base_level, one_step}),
+                               std::max<int64_t>(1, r.run_level));
   r.short_move = RampSpec::ShortMove::Meet;
   // The engine's invariants (checked in the sanitizer build): every rate the PROFILE and
   // SUSTAIN checks accept gives a positive step size far from int64 overflow.
@@ -105,6 +108,8 @@ RampSpec constant_rate(double hz) {
   return r;
 }
 
-double clamp_to_profile(const Profile& p, double magnitude) { return std::clamp(magnitude, p.min, p.max); }
+double clamp_to_profile(const Profile& p, double magnitude) {
+  return std::clamp(magnitude, p.min, p.max);
+}
 
 }  // namespace stepnode::motion::hp

@@ -17,9 +17,9 @@ struct PulseSetup {
 enum class Output : uint8_t { Pstp = 0, Ndir = 1 };
 
 struct Pulse {
-  Output output = Output::Pstp;  // where the pulse appears
-  bool pstp_level = false;       // PSTP level during the pulse
-  bool ndir_level = false;       // NDIR level during the pulse (SD: the direction)
+  Output output = Output::Pstp;               // where the pulse appears
+  bool pstp_level = false;                    // PSTP level during the pulse
+  bool ndir_level = false;                    // NDIR level during the pulse (SD: the direction)
   bool pstp_idle = false, ndir_idle = false;  // levels between pulses
 };
 

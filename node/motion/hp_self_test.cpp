@@ -18,7 +18,8 @@ bool pulse_outputs_decode() {
           const PulseSetup setup{mode, pstp, ndir};
           const Pulse p = pulse_for(setup, direction);
           if (direction_of(setup, p) != direction) return false;
-          const bool pulsed = p.output == Output::Pstp ? p.pstp_level != p.pstp_idle : p.ndir_level != p.ndir_idle;
+          const bool pulsed =
+              p.output == Output::Pstp ? p.pstp_level != p.pstp_idle : p.ndir_level != p.ndir_idle;
           if (!pulsed) return false;
         }
   return true;
@@ -35,7 +36,8 @@ bool pulse_engine_moves() {
   Tick last = -1;
   int count = 0;
   while (g.next(s)) {
-    if (s.direction != +1 || (last >= 0 && s.time - last < shortest) || s.time <= last) return false;
+    if (s.direction != +1 || (last >= 0 && s.time - last < shortest) || s.time <= last)
+      return false;
     last = s.time;
     if (++count > 100) return false;
   }

@@ -60,7 +60,8 @@ int64_t RampSpec::peak_level_for(int64_t distance) const {
 
 RampSpec frequency_ramp(int64_t min_hz, int64_t max_hz, int64_t slope_mhz_per_s) {
   if (min_hz < 0 || max_hz < 1 || min_hz > max_hz || slope_mhz_per_s <= 0)
-    throw std::invalid_argument("frequency ramp needs 0 <= min <= max, max >= 1 Hz and a slope > 0");
+    throw std::invalid_argument(
+        "frequency ramp needs 0 <= min <= max, max >= 1 Hz and a slope > 0");
   RampSpec r;
   r.phase_per_step = kClockHz * kLevelsPerHz;
   r.base_level = min_hz * kLevelsPerHz;
@@ -78,7 +79,8 @@ int64_t profile_levels_per_hz(int64_t steepest) {
 
 RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t levels_per_hz) {
   if (velocity < 1 || accel < 1 || decel < 1 || levels_per_hz < 1)
-    throw std::invalid_argument("a profile ramp needs a velocity, acceleration and deceleration > 0");
+    throw std::invalid_argument(
+        "a profile ramp needs a velocity, acceleration and deceleration > 0");
   RampSpec r;
   r.phase_per_step = kClockHz * levels_per_hz;
   r.base_level = 0;  // from and to standstill
@@ -87,8 +89,8 @@ RampSpec profile_ramp(int64_t velocity, int64_t accel, int64_t decel, int64_t le
   r.decel_ticks_per_level = slope_ticks_per_level(decel, levels_per_hz);
   // The last step a ramp down leaves over goes at the velocity one step from standstill
   // reaches (sqrt(2 * decel)), never faster than the run velocity.
-  const auto one_step = static_cast<int64_t>(std::llround(std::sqrt(2.0 * static_cast<double>(decel)) *
-                                                          static_cast<double>(levels_per_hz)));
+  const auto one_step = static_cast<int64_t>(std::llround(
+      std::sqrt(2.0 * static_cast<double>(decel)) * static_cast<double>(levels_per_hz)));
   r.min_creep_level = std::clamp<int64_t>(one_step, 1, r.run_level);
   return r;
 }

@@ -59,7 +59,9 @@ void SCurve::add_transition(Tick& t, State& s, double v1, double decel) {
   if (s.v < 0) s.v = 0;
 }
 
-void SCurve::add_open(Tick t, const State& s, Kind kind) { push(Segment{t, kOpen, s.p, s.v, 0, 0, kind}); }
+void SCurve::add_open(Tick t, const State& s, Kind kind) {
+  push(Segment{t, kOpen, s.p, s.v, 0, 0, kind});
+}
 
 void SCurve::add_position_goal(Tick t, State s, int64_t distance, double vp) {
   add_transition(t, s, vp, limits_.deceleration);
@@ -89,8 +91,8 @@ void SCurve::add_position_goal(Tick t, State s, int64_t distance, double vp) {
   for (int k = n_up - 1; k >= 0; --k) {
     const Segment& g = up[k];
     const Tick n = g.len;
-    push(Segment{t, n, end - g.at(n), g.slope(n), -(g.c2 + 3 * static_cast<__int128>(g.c3) * n), g.c3,
-                 Kind::Decelerating});
+    push(Segment{t, n, end - g.at(n), g.slope(n), -(g.c2 + 3 * static_cast<__int128>(g.c3) * n),
+                 g.c3, Kind::Decelerating});
     t += n;
   }
   // Never reached when the plan fits; after a ramp that could not (a target too close to
@@ -99,7 +101,8 @@ void SCurve::add_position_goal(Tick t, State s, int64_t distance, double vp) {
   add_open(t, State{end, static_cast<__int128>(creep * kV), 0}, Kind::Creep);
 }
 
-void SCurve::replan(Tick at, std::optional<int64_t> distance, double velocity, std::optional<double> decel) {
+void SCurve::replan(Tick at, std::optional<int64_t> distance, double velocity,
+                    std::optional<double> decel) {
   peeked_.reset();
   const State now = state_at(at);
   const double v0 = static_cast<double>(now.v) / kV, a0 = static_cast<double>(now.a) / kA;
@@ -114,9 +117,11 @@ void SCurve::replan(Tick at, std::optional<int64_t> distance, double velocity, s
   }
   // The highest velocity (up to the cruise velocity) whose change and ramp down fit the
   // steps left; none fits: ramp down at once (the move ends on its last step).
-  const double left = static_cast<double>(static_cast<__int128>(*distance) * kS - now.p) / static_cast<double>(kS);
+  const double left =
+      static_cast<double>(static_cast<__int128>(*distance) * kS - now.p) / static_cast<double>(kS);
   auto needs = [&](double vp) {
-    const scurve::Kinematics k = scurve::run({0, v0, a0}, scurve::transition(v0, a0, vp, limits_, limits_.deceleration));
+    const scurve::Kinematics k =
+        scurve::run({0, v0, a0}, scurve::transition(v0, a0, vp, limits_, limits_.deceleration));
     return k.p + scurve::run({}, scurve::ramp_down_mirror(vp, limits_, limits_.deceleration)).p;
   };
   double vp = velocity;

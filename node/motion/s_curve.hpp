@@ -22,9 +22,9 @@ namespace stepnode::motion {
 // The limits of an S-curve, in steps, steps/s, steps/s^2 and steps/s^3. A jerk of 0 is not
 // limited (60A4h: "0: the jerk is not limited"): that phase takes no time.
 struct JerkLimits {
-  double velocity = 1;      // the cruise velocity (6081h, 60FFh)
-  double acceleration = 1;  // 6083h
-  double deceleration = 1;  // 6084h (or 6085h for a quick stop)
+  double velocity = 1;                                // the cruise velocity (6081h, 60FFh)
+  double acceleration = 1;                            // 6083h
+  double deceleration = 1;                            // 6084h (or 6085h for a quick stop)
   uint32_t begin_accel_jerk = 0, end_accel_jerk = 0;  // 60A4h:1, :3
   uint32_t begin_decel_jerk = 0, end_decel_jerk = 0;  // 60A4h:2, :4
 };
@@ -65,8 +65,12 @@ class SCurve {
     int64_t c3 = 0;
     Kind kind = Kind::Accelerating;
     __int128 end = 0;  // at(len), the position where it ends (push() sets it)
-    __int128 at(Tick tau) const { return c0 + tau * (c1 + tau * (c2 + c3 * static_cast<__int128>(tau))); }
-    __int128 slope(Tick tau) const { return c1 + tau * (2 * c2 + 3 * c3 * static_cast<__int128>(tau)); }
+    __int128 at(Tick tau) const {
+      return c0 + tau * (c1 + tau * (c2 + c3 * static_cast<__int128>(tau)));
+    }
+    __int128 slope(Tick tau) const {
+      return c1 + tau * (2 * c2 + 3 * c3 * static_cast<__int128>(tau));
+    }
   };
   struct State {
     __int128 p = 0, v = 0, a = 0;  // S p, S dp/dτ, S d2p/dτ2 / 2 (c0, c1, c2 of a segment here)
@@ -75,7 +79,8 @@ class SCurve {
   static constexpr int kMaxSegments = 12;
 
   State state_at(Tick at) const;
-  void replan(Tick at, std::optional<int64_t> distance, double velocity, std::optional<double> decel);
+  void replan(Tick at, std::optional<int64_t> distance, double velocity,
+              std::optional<double> decel);
   void push(const Segment& s);
   void add_transition(Tick& t, State& s, double v1, double decel);
   void add_position_goal(Tick t, State s, int64_t distance, double vp);
@@ -86,7 +91,7 @@ class SCurve {
   JerkLimits limits_;
   std::array<Segment, kMaxSegments> segs_{};
   int count_ = 0, seg_ = 0;
-  Tick last_ = 0;        // the last step's tick (or the start)
+  Tick last_ = 0;  // the last step's tick (or the start)
   int64_t steps_ = 0;
   std::optional<int64_t> distance_;
   double velocity_ = 0;

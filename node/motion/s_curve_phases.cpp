@@ -33,7 +33,8 @@ Phases transition(double v0, double a0, double v1, const JerkLimits& l, double d
   Phases ph;
   // Rising if v1 lies at or above where the velocity ends when the acceleration is taken
   // to 0 at once (with the jerk that does it).
-  const double settle = a0 > 0 ? a0 * a0 * inverse(l.end_accel_jerk) / 2 : -a0 * a0 * inverse(l.begin_accel_jerk) / 2;
+  const double settle =
+      a0 > 0 ? a0 * a0 * inverse(l.end_accel_jerk) / 2 : -a0 * a0 * inverse(l.begin_accel_jerk) / 2;
   ph.sign = v1 >= v0 + settle ? +1 : -1;
   if (ph.sign > 0) {
     ph.j1 = l.begin_accel_jerk;

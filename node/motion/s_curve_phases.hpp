@@ -7,8 +7,8 @@
 namespace stepnode::motion::scurve {
 
 struct Phases {
-  int sign = +1;      // +1 the velocity rises, -1 it falls
-  double peak = 0;    // |acceleration| held in phase 2
+  int sign = +1;                  // +1 the velocity rises, -1 it falls
+  double peak = 0;                // |acceleration| held in phase 2
   double t1 = 0, t2 = 0, t3 = 0;  // seconds
   uint32_t j1 = 0, j3 = 0;        // jerk of phases 1 and 3 (0: not limited, no time)
 };

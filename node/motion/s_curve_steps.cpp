@@ -102,6 +102,8 @@ std::optional<Tick> SCurve::next_step() {
 
 SCurve::Kind SCurve::kind() const { return seg_ < count_ ? segs_[seg_].kind : Kind::Hold; }
 
-bool SCurve::at_target_velocity() const { return !ended_ && hold_velocity_ >= 0 && kind() == Kind::Hold; }
+bool SCurve::at_target_velocity() const {
+  return !ended_ && hold_velocity_ >= 0 && kind() == Kind::Hold;
+}
 
 }  // namespace stepnode::motion

@@ -42,7 +42,8 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_.peak_level = std::max(peak_level_, ramp.base_level);
   if (peak_level_ <= ramp.base_level) {
     phase_ = MotionPhase::Creeping;  // too short to ramp at all: the whole move at base
-    level_ = std::max<int64_t>(ramp.base_level, ramp.min_creep_level);  // a 0 Hz base still has to move
+    level_ =
+        std::max<int64_t>(ramp.base_level, ramp.min_creep_level);  // a 0 Hz base still has to move
     marks_.decel_start = marks_.decel_end = start;
     return;
   }
@@ -74,7 +75,8 @@ void StepGenerator::plan_decel() {
   const int64_t d = ramp_.phase_per_step;
   __int128 target = static_cast<__int128>(*distance_) * d - ramp_.decel_phase(level_);
   __int128 current = static_cast<__int128>(steps_done_) * d + acc_;
-  decel_tick_ = current >= target ? t_ : t_ + static_cast<Tick>((target - current + level_ - 1) / level_);
+  decel_tick_ =
+      current >= target ? t_ : t_ + static_cast<Tick>((target - current + level_ - 1) / level_);
 }
 
 void StepGenerator::begin_decel() {
@@ -277,7 +279,8 @@ namespace stepnode::motion {
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
   peeked_ = kUnpeeked;  // the next step may move
   if (scurve_ && phase_ != MotionPhase::Idle && !stopping_) {
-    s_.p->change_velocity(at, static_cast<double>(level) * kClockHz / static_cast<double>(ramp_.phase_per_step));
+    s_.p->change_velocity(
+        at, static_cast<double>(level) * kClockHz / static_cast<double>(ramp_.phase_per_step));
     return s_follow();
   }
   if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
@@ -340,14 +343,16 @@ void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
   advance_to(at);
   then_.reset();
   const int64_t level =
-      (static_cast<__int128>(level_) * ramp.phase_per_step + ramp_.phase_per_step / 2) / ramp_.phase_per_step;
+      (static_cast<__int128>(level_) * ramp.phase_per_step + ramp_.phase_per_step / 2) /
+      ramp_.phase_per_step;
   adopt(ramp, level);
 }
 
 void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
   // The phase accumulator keeps its fraction of a step: acc/D is the same on both grids
   // (rounded down, so 0 <= acc < D holds on the new one).
-  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * ramp.phase_per_step / ramp_.phase_per_step);
+  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * ramp.phase_per_step /
+                              ramp_.phase_per_step);
   ramp_ = ramp;
   level_ = std::max<int64_t>(1, level);
   phase_ = MotionPhase::Running;

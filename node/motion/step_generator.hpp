@@ -108,19 +108,19 @@ class StepGenerator {
   int direction_ = +1;
   std::optional<int64_t> distance_;
   int64_t peak_level_ = 0;
-  Tick t_ = 0;              // time of the last event (step or level change)
+  Tick t_ = 0;  // time of the last event (step or level change)
   // peek()'s answer until the motion changes (a plain tick: the hot path copies the
   // generator for every step): a step time, or one of these.
   static constexpr Tick kUnpeeked = -2, kNoStep = -1;
   Tick peeked_ = kUnpeeked;
-  int64_t acc_ = 0;         // phase accumulator, 0 <= acc_ < phase_per_step
+  int64_t acc_ = 0;  // phase accumulator, 0 <= acc_ < phase_per_step
   int64_t level_ = 0;
-  Tick interval_end_ = 0;   // end of the current ramp interval
+  Tick interval_end_ = 0;  // end of the current ramp interval
   int64_t interval_index_ = 0;
-  bool stopping_ = false;   // stop(): no creep after the ramp
-  Tick decel_tick_ = -1;     // while running to a target: the tick deceleration begins
-  bool holding_ = false;     // change_velocity() down: run on at decel_floor_
-  int64_t decel_floor_ = 0;  // the level a deceleration ends at (base, or a lower velocity)
+  bool stopping_ = false;         // stop(): no creep after the ramp
+  Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
+  bool holding_ = false;          // change_velocity() down: run on at decel_floor_
+  int64_t decel_floor_ = 0;       // the level a deceleration ends at (base, or a lower velocity)
   std::optional<RampSpec> then_;  // change_velocity(): the grid to move to once there
   int64_t steps_done_ = 0;
   Marks marks_;

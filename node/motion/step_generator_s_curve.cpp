@@ -11,7 +11,8 @@ namespace stepnode::motion {
 double StepGenerator::slope_of(Rational z) const {
   // Ticks per level on this grid -> steps/s^2: kClockHz^2 / (z * phase_per_step).
   const double hz = static_cast<double>(kClockHz);
-  return hz * hz * static_cast<double>(z.den) / (static_cast<double>(z.num) * static_cast<double>(ramp_.phase_per_step));
+  return hz * hz * static_cast<double>(z.den) /
+         (static_cast<double>(z.num) * static_cast<double>(ramp_.phase_per_step));
 }
 
 JerkLimits StepGenerator::jerk_limits(const RampSpec& r) const {

@@ -23,7 +23,8 @@ class StepQueue {
 
   // `history`: how many of the steps that went out are kept for position_at (rounded up
   // to a power of two: a step costs a store and an increment).
-  explicit StepQueue(std::size_t history = 4096) : history_(std::bit_ceil(history)), mask_(history_.size() - 1) {}
+  explicit StepQueue(std::size_t history = 4096)
+      : history_(std::bit_ceil(history)), mask_(history_.size() - 1) {}
 
   void push(Tick time, int direction) { queued_.push_back({time, direction >= 0 ? +1 : -1}); }
   bool due(Tick until) const { return !queued_.empty() && queued_.front().time <= until; }

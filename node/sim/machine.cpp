@@ -54,7 +54,8 @@ void AxisMachine::move(motion::Tick time, int direction, uint32_t width_ns) {  /
   ++pulses_;
   last_step_time_ = clock_ = time;  // steps come in time order, each after the last flush
   last_width_ns_ = width_ns;
-  if (tracing_) [[unlikely]] record(time, direction, width_ns);
+  if (tracing_) [[unlikely]]
+    record(time, direction, width_ns);
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping
@@ -62,11 +63,13 @@ void AxisMachine::move(motion::Tick time, int direction, uint32_t width_ns) {  /
   if (config_.stall_above && next > *config_.stall_above) return;  // jammed
   if (config_.stall_below && next < *config_.stall_below) return;
   position_ = next;
-  if (position_ < steady_low_ || position_ > steady_high_) [[unlikely]] sense(time);
+  if (position_ < steady_low_ || position_ > steady_high_) [[unlikely]]
+    sense(time);
 }
 
 // Out of line: the hot path of move() stays as small as it was without a trace.
-__attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction, uint32_t width_ns) {
+__attribute__((noinline)) void AxisMachine::record(motion::Tick time, int direction,
+                                                   uint32_t width_ns) {
   const int d = direction >= 0 ? +1 : -1;
   if (trace_) trace_->push_back({time, d});
   if (pulse_trace_) pulse_trace_->push_back({time, d, width_ns});

@@ -24,19 +24,19 @@ struct Cam {
 using EncoderKind = motion::EncoderKind;
 
 struct AxisMachineConfig {
-  std::optional<Cam> home;               // home switch
-  std::optional<Cam> index;              // index input (indexed moves)
-  std::optional<int64_t> lower_limit;    // active at or below this position
-  std::optional<int64_t> upper_limit;    // active at or above this position
-  int64_t steps_per_rev = 2000;          // motor steps (or microsteps) per revolution
-  int64_t encoder_lines = 500;           // encoder lines per revolution
+  std::optional<Cam> home;             // home switch
+  std::optional<Cam> index;            // index input (indexed moves)
+  std::optional<int64_t> lower_limit;  // active at or below this position
+  std::optional<int64_t> upper_limit;  // active at or above this position
+  int64_t steps_per_rev = 2000;        // motor steps (or microsteps) per revolution
+  int64_t encoder_lines = 500;         // encoder lines per revolution
   EncoderKind encoder = EncoderKind::Quadrature;
-  int64_t marker_offset = 0;             // marker once per revolution, at this offset...
-  int64_t marker_width = 4;              // ...and this many steps wide
+  int64_t marker_offset = 0;  // marker once per revolution, at this offset...
+  int64_t marker_width = 4;   // ...and this many steps wide
   // Faults.
   std::optional<int64_t> stall_below, stall_above;  // the motor cannot pass these positions
-  uint32_t miss_every = 0;               // every n-th step is lost (0 = none)
-  uint32_t move_every = 0;               // a slipping motor: only every n-th step moves it
+  uint32_t miss_every = 0;                          // every n-th step is lost (0 = none)
+  uint32_t move_every = 0;  // a slipping motor: only every n-th step moves it
 };
 
 // One step pulse as the drive received it: its tick and direction (+1 / -1).
@@ -69,7 +69,9 @@ class AxisMachine : public motion::MotorPort {
   void queue_pulse(motion::Tick time, const motion::OutputPulse& p) override;
   void flush(motion::Tick until) override;
   void cancel_after(motion::Tick after) override;
-  std::optional<int64_t> position_at(motion::Tick time) const override { return steps_.position_at(time); }
+  std::optional<int64_t> position_at(motion::Tick time) const override {
+    return steps_.position_at(time);
+  }
   std::size_t queued() const { return steps_.queued(); }
 
   // One step pulse from the drive at its time (+1 up, -1 down). The motor follows unless

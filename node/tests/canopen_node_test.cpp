@@ -281,7 +281,8 @@ TEST(NodeConfig, BadCommandLinesAreOneLineUsageErrors) {
   EXPECT_THROW(parse({"--iface", "vcan0", "--node-id", "0"}), UsageError);
   EXPECT_THROW(parse({"--iface", "vcan0", "--node-id", "128"}), UsageError);
   EXPECT_THROW(parse({"--node-id", "5"}), UsageError);
-  EXPECT_THROW(parse({"--iface", "vcan0", "--node-id", "5", "--config", "/nonexistent.toml"}), UsageError);
+  EXPECT_THROW(parse({"--iface", "vcan0", "--node-id", "5", "--config", "/nonexistent.toml"}),
+               UsageError);
   std::string bad = (std::filesystem::temp_directory_path() / "stepnode-bad.toml").string();
   std::ofstream(bad) << "node_id = [\n";
   try {

@@ -21,21 +21,25 @@ class Cia402Bus : public NodeHarness {
   }
   // RPDO1: controlword (U16) and modes of operation (I8).
   void rpdo1(uint16_t controlword, int8_t mode) {
-    frame(CanFrame(0x200 + kId, {static_cast<uint8_t>(controlword), static_cast<uint8_t>(controlword >> 8),
-                                 static_cast<uint8_t>(mode)}));
+    frame(CanFrame(0x200 + kId,
+                   {static_cast<uint8_t>(controlword), static_cast<uint8_t>(controlword >> 8),
+                    static_cast<uint8_t>(mode)}));
   }
   // RPDO2: target position (I32) and target velocity (I32).
   void rpdo2(int32_t position, int32_t velocity) {
-    auto b = [](int32_t v, int k) { return static_cast<uint8_t>(static_cast<uint32_t>(v) >> (8 * k)); };
-    frame(CanFrame(0x300 + kId, {b(position, 0), b(position, 1), b(position, 2), b(position, 3), b(velocity, 0),
-                                 b(velocity, 1), b(velocity, 2), b(velocity, 3)}));
+    auto b = [](int32_t v, int k) {
+      return static_cast<uint8_t>(static_cast<uint32_t>(v) >> (8 * k));
+    };
+    frame(CanFrame(0x300 + kId, {b(position, 0), b(position, 1), b(position, 2), b(position, 3),
+                                 b(velocity, 0), b(velocity, 1), b(velocity, 2), b(velocity, 3)}));
   }
   // The last TPDO1 sent: statusword and modes display.
   std::optional<std::pair<uint16_t, int8_t>> last_tpdo1() {
     for (size_t i = sent.size(); i-- > 0;)
       if (sent[i].id == 0x180 + kId && sent[i].dlc == 3)
-        return std::pair<uint16_t, int8_t>{static_cast<uint16_t>(sent[i].data[0] | sent[i].data[1] << 8),
-                                           static_cast<int8_t>(sent[i].data[2])};
+        return std::pair<uint16_t, int8_t>{
+            static_cast<uint16_t>(sent[i].data[0] | sent[i].data[1] << 8),
+            static_cast<int8_t>(sent[i].data[2])};
     return std::nullopt;
   }
   std::optional<int32_t> last_position() {
@@ -74,10 +78,10 @@ TEST_F(Cia402Bus, AMasterEnablesTheDriveAndMovesItInProfilePosition) {
   rpdo1(0x0006, 1);  // shutdown
   advance_ms(2);
   EXPECT_EQ(statusword() & 0x6F, 0x21);  // ready to switch on
-  rpdo1(0x0007, 1);  // switch on
+  rpdo1(0x0007, 1);                      // switch on
   advance_ms(2);
   EXPECT_EQ(statusword() & 0x6F, 0x23);  // switched on
-  rpdo1(0x000F, 1);  // enable operation
+  rpdo1(0x000F, 1);                      // enable operation
   advance_ms(2);
   EXPECT_EQ(statusword() & 0x6F, 0x27);  // operation enabled
   EXPECT_EQ(last_tpdo1()->second, 1);
@@ -93,7 +97,7 @@ TEST_F(Cia402Bus, AMasterEnablesTheDriveAndMovesItInProfilePosition) {
   rpdo1(0x000F, 1);
   advance_ms(2);
   EXPECT_FALSE(statusword() & 0x1000);
-  advance_ms(1000);  // 0.1 s up, 0.65 s at 2000 steps/s, 0.1 s down
+  advance_ms(1000);                    // 0.1 s up, 0.65 s at 2000 steps/s, 0.1 s down
   EXPECT_TRUE(statusword() & 0x0400);  // target reached
   EXPECT_EQ(*sdo_read(0x6064, 0), 1500u);
   EXPECT_EQ(last_position().value_or(0), 1500);
@@ -128,7 +132,7 @@ TEST_F(Cia402Bus, ALostMasterIsAFaultWithEmcy8130By6007) {
   rpdo2(0, 500);
   advance_ms(50);
   sent.clear();
-  advance_ms(200);  // the master's heartbeat stops
+  advance_ms(200);                                // the master's heartbeat stops
   EXPECT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x08u);  // fault (6007h = 1)
   EXPECT_EQ(*sdo_read(0x603F, 0), 0x8130u);
   bool emcy = false;

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "node/diagnostic_objects.hpp"
-#include "node/tests/node_harness.hpp"
 #include "node/profiles/horner/bits.hpp"
 #include "node/profiles/horner/objects.hpp"
+#include "node/tests/node_harness.hpp"
 
 namespace stepnode::node::test {
 namespace {
@@ -46,7 +46,9 @@ class CommunicationErrors : public NodeHarness {
     ASSERT_EQ(sdo_write(axis_obj::index(a, axis_obj::kCommandBits), 0, bits, 2), 0u);
     ASSERT_EQ(sdo_write(axis_obj::index(a, axis_obj::kCommandBits), 0, 0, 2), 0u);
   }
-  void jog(unsigned a) { ASSERT_EQ(sdo_write(axis_obj::index(a, axis_obj::kCommandBits), 0, cmd::kJogUp, 2), 0u); }
+  void jog(unsigned a) {
+    ASSERT_EQ(sdo_write(axis_obj::index(a, axis_obj::kCommandBits), 0, cmd::kJogUp, 2), 0u);
+  }
   void beat(uint8_t n) { frame(CanFrame(0x700u + n, {0x05})); }
   // Heartbeats of `nodes` every 100 ms for `ms`.
   void beating(std::vector<uint8_t> nodes, uint64_t ms) {
@@ -55,9 +57,15 @@ class CommunicationErrors : public NodeHarness {
       for (uint8_t n : nodes) beat(n);
     }
   }
-  uint16_t status(unsigned a) { return od().get<uint16_t>(axis_obj::index(a, axis_obj::kStatusBits), 0); }
-  int32_t velocity(unsigned a) { return od().get<int32_t>(axis_obj::index(a, axis_obj::kVelocity), 0); }
-  int32_t position(unsigned a) { return od().get<int32_t>(axis_obj::index(a, axis_obj::kMotorPosition), 0); }
+  uint16_t status(unsigned a) {
+    return od().get<uint16_t>(axis_obj::index(a, axis_obj::kStatusBits), 0);
+  }
+  int32_t velocity(unsigned a) {
+    return od().get<int32_t>(axis_obj::index(a, axis_obj::kVelocity), 0);
+  }
+  int32_t position(unsigned a) {
+    return od().get<int32_t>(axis_obj::index(a, axis_obj::kMotorPosition), 0);
+  }
   // The NMT states the node announced in heartbeats since `from`.
   std::vector<uint8_t> announced(size_t from) const {
     std::vector<uint8_t> out;
@@ -110,7 +118,8 @@ TEST_F(CommunicationErrors, TheLostMasterRampsEveryAxisDownAndLatchesI8InVirtual
   jog(0);
   beating({kMaster, kOther}, 500);
   EXPECT_EQ(position(0), stopped);
-  EXPECT_EQ(announced(from), std::vector<uint8_t>(announced(from).size(), 0x05)) << "still operational";
+  EXPECT_EQ(announced(from), std::vector<uint8_t>(announced(from).size(), 0x05))
+      << "still operational";
 }
 
 TEST_F(CommunicationErrors, OnlyTheConfiguredMasterStopsTheAxes) {
@@ -210,14 +219,14 @@ TEST_F(CommunicationErrors, NmtStoppedRampsTheAxesDownPreOperationalDoesNot) {
 }
 
 TEST_F(CommunicationErrors, ValuesOutsideTheStandardsAreRefusedAndBothAreStored) {
-  EXPECT_EQ(sdo_write(0x1029, 1, 3, 1), kValueTooHigh);  // 3..0x7F reserved
+  EXPECT_EQ(sdo_write(0x1029, 1, 3, 1), kValueTooHigh);     // 3..0x7F reserved
   EXPECT_EQ(sdo_write(0x1029, 1, 0x80, 1), kValueTooHigh);  // no manufacturer values here
   EXPECT_EQ(sdo_write(kMasterNodeId, 0, 128, 1), kValueTooHigh);
   EXPECT_EQ(*sdo_read(0x1029, 0), 1u);  // highest sub-index
   ASSERT_EQ(sdo_write(0x1029, 1, 2, 1), 0u);
   ASSERT_EQ(sdo_write(kMasterNodeId, 0, kMaster, 1), 0u);
   ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173), 0u);  // "save"
-  make(2);  // a restart
+  make(2);                                          // a restart
   EXPECT_EQ(od().get<uint8_t>(0x1029, 1), 2);
   EXPECT_EQ(od().get<uint8_t>(kMasterNodeId, 0), kMaster);
 }

@@ -102,13 +102,19 @@ TEST_F(ConfigTest, NodeIdNoneStartsAnLssUnconfiguredNode) {
 }
 
 TEST_F(ConfigTest, SerialNumberFromTheCommandLineOrTheFile) {
-  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "7"}).options.device.serial_number, 7u);
-  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "0x1A2B"}).options.device.serial_number,
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "7"})
+                .options.device.serial_number,
+            7u);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "0x1A2B"})
+                .options.device.serial_number,
             0x1A2Bu);
-  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "4294967295"}).options.device.serial_number,
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--serial-number", "4294967295"})
+                .options.device.serial_number,
             0xFFFFFFFFu);
   std::string path = config("serial_number = 12\n");
-  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path}).options.device.serial_number, 12u);
+  EXPECT_EQ(
+      parse({"--iface", "vcan0", "--node-id", "5", "--config", path}).options.device.serial_number,
+      12u);
   EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path, "--serial-number", "13"})
                 .options.device.serial_number,
             13u);
@@ -162,10 +168,10 @@ TEST_F(ConfigTest, BadValuesInTheFileNameTheKey) {
     const char* text;
     const char* key;
   } cases[] = {
-      {"node_id = 0\n", "node_id"},          {"node_id = 128\n", "node_id"},
-      {"node_id = \"5\"\n", "node_id"},      {"iface = 5\n", "iface"},
-      {"tick_us = 1\n", "tick_us"},          {"axes = 9\n", "axes"},
-      {"state_dir = 1\n", "state_dir"},      {"[defaults]\n\"1017\" = [1]\n", "1017"},
+      {"node_id = 0\n", "node_id"},     {"node_id = 128\n", "node_id"},
+      {"node_id = \"5\"\n", "node_id"}, {"iface = 5\n", "iface"},
+      {"tick_us = 1\n", "tick_us"},     {"axes = 9\n", "axes"},
+      {"state_dir = 1\n", "state_dir"}, {"[defaults]\n\"1017\" = [1]\n", "1017"},
   };
   for (const auto& c : cases) {
     std::string path = config(c.text);
@@ -176,8 +182,8 @@ TEST_F(ConfigTest, BadValuesInTheFileNameTheKey) {
 }
 
 TEST_F(ConfigTest, FileValuesAndCommandLineWins) {
-  std::string path = config(
-      "iface = \"can0\"\nnode_id = 9\naxes = 2\ntick_us = 500\nstate_dir = \"/tmp/x\"\n");
+  std::string path =
+      config("iface = \"can0\"\nnode_id = 9\naxes = 2\ntick_us = 500\nstate_dir = \"/tmp/x\"\n");
   NodeConfig cfg = parse({"--config", path});
   EXPECT_EQ(cfg.iface, "can0");
   EXPECT_EQ(cfg.options.device.node_id, 9);
@@ -196,8 +202,8 @@ TEST_F(ConfigTest, HelpExitsAtOnceWithStatusZero) {
 }
 
 TEST_F(ConfigTest, DefaultsTableSetsObjectDefaults) {
-  std::string path = config(
-      "node_id = 5\n[defaults]\n\"1017\" = 250\n\"1016:1\" = 0x00200064\n\"2F00:2\" = 7\n");
+  std::string path =
+      config("node_id = 5\n[defaults]\n\"1017\" = 250\n\"1016:1\" = 0x00200064\n\"2F00:2\" = 7\n");
   NodeConfig cfg = parse({"--iface", "vcan0", "--config", path});
   ASSERT_EQ(cfg.object_defaults.size(), 3u);
   cfg.options.layout.axes = 1;

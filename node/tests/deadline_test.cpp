@@ -51,7 +51,8 @@ TEST_F(DeadlineTest, HeartbeatProducerIsLastSentPlusProducerTime) {
 TEST_F(DeadlineTest, HeartbeatConsumerTimesOutJustAfterTheConsumerTime) {
   ASSERT_EQ(sdo_write(0x1017, 0, 0, 2), 0u);
   ASSERT_EQ(sdo_write(0x1016, 1, (9u << 16) | 150u), 0u);  // node 9, 150 ms
-  EXPECT_EQ(device->next_deadline_us(t), kNoDeadline) << "monitoring starts with the first heartbeat";
+  EXPECT_EQ(device->next_deadline_us(t), kNoDeadline)
+      << "monitoring starts with the first heartbeat";
   frame(CanFrame(0x709, {0x05}));
   const uint64_t heard = t;
   // Late is "more than" the consumer time: the first moment is 150 ms + 1 us later.
@@ -69,7 +70,8 @@ TEST_F(DeadlineTest, LifeGuardingDeadlineIsTheNodeLifeTimeAfterTheLastRequest) {
   ASSERT_EQ(sdo_write(0x1017, 0, 0, 2), 0u);
   ASSERT_EQ(sdo_write(0x100C, 0, 100, 2), 0u);  // guard time 100 ms
   ASSERT_EQ(sdo_write(0x100D, 0, 3, 1), 0u);    // life time factor 3: 300 ms
-  EXPECT_EQ(device->next_deadline_us(t), kNoDeadline) << "life guarding starts with the first request";
+  EXPECT_EQ(device->next_deadline_us(t), kNoDeadline)
+      << "life guarding starts with the first request";
   CanFrame rtr(kHeartbeatId, {});
   rtr.rtr = true;
   frame(rtr);

@@ -8,9 +8,9 @@
 #include <set>
 #include <string>
 
-#include "node/profiles/hp44714a/objects.hpp"
 #include "node/profiles/horner/bits.hpp"
 #include "node/profiles/horner/objects.hpp"
+#include "node/profiles/hp44714a/objects.hpp"
 #include "node/tests/node_harness.hpp"
 #include "od/eds.hpp"
 
@@ -68,10 +68,12 @@ TEST_F(DeviceProfiles, AnHpOnlyDeviceRunsFigure3_3OverTheBus) {
   ASSERT_EQ(put(p, hp44714a::profile_sub::kLast, 25e-6), 0u);
   ASSERT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kApply, 1), 0u);
   ASSERT_EQ(put(hp44714a::obj::index(0, hp44714a::obj::kPscale), 0, 0.1), 0u);
-  ASSERT_EQ(put(hp44714a::obj::index(0, hp44714a::obj::kMove), hp44714a::move_sub::kRelative, 20), 0u);
+  ASSERT_EQ(put(hp44714a::obj::index(0, hp44714a::obj::kMove), hp44714a::move_sub::kRelative, 20),
+            0u);
   advance_ms(3000);
   EXPECT_EQ(static_cast<int8_t>(*sdo_read(hp44714a::obj::index(0, hp44714a::obj::kDone), 0)), 0);
-  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x5003, 0)), 200);  // the simulated motor moved 200 steps
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x5003, 0)),
+            200);  // the simulated motor moved 200 steps
   EXPECT_NEAR(get(hp44714a::obj::index(0, hp44714a::obj::kPosition)), 20.0, 1e-9);
 }
 
@@ -89,7 +91,8 @@ TEST_F(DeviceProfiles, AHornerOnlyDeviceHasOnlyTheRegisters) {
   EXPECT_EQ(cob_id(0x1800) & 0x80000000u, 0u);
   // A move over SDO: Clear Errors, Set Position, Move Relative 500 (SPM30 chapter 3).
   const uint16_t bits = horner::obj::index(0, horner::obj::kCommandBits);
-  for (uint16_t c : {horner::command::kClearErrors, horner::command::kSetPosition, horner::command::kMoveRelative}) {
+  for (uint16_t c : {horner::command::kClearErrors, horner::command::kSetPosition,
+                     horner::command::kMoveRelative}) {
     if (c == horner::command::kMoveRelative) {
       ASSERT_EQ(sdo_write(horner::obj::index(0, horner::obj::kDestination), 0, 500), 0u);
     }
@@ -97,7 +100,8 @@ TEST_F(DeviceProfiles, AHornerOnlyDeviceHasOnlyTheRegisters) {
     ASSERT_EQ(sdo_write(bits, 0, 0, 2), 0u);
   }
   advance_ms(3000);
-  EXPECT_EQ(static_cast<int32_t>(*sdo_read(horner::obj::index(0, horner::obj::kMotorPosition), 0)), 500);
+  EXPECT_EQ(static_cast<int32_t>(*sdo_read(horner::obj::index(0, horner::obj::kMotorPosition), 0)),
+            500);
   EXPECT_EQ(static_cast<int32_t>(*sdo_read(0x5003, 0)), 500);
 }
 
@@ -106,7 +110,8 @@ TEST_F(DeviceProfiles, TheEdsCommentNamesTheProfiles) {
   od::SdoResult r = transfer(false, 0x1021, 0);
   ASSERT_TRUE(r.ok());
   std::string text(r.data.begin(), r.data.end());
-  EXPECT_NE(text.find("Line2=HP 44714A, user objects; 2 axes on the simulated machine"), std::string::npos);
+  EXPECT_NE(text.find("Line2=HP 44714A, user objects; 2 axes on the simulated machine"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -23,8 +23,9 @@ class EmcyErrorReset : public NodeHarness {
   }
   void rpdo1(uint16_t bits, int32_t dest) {
     auto d = static_cast<uint32_t>(dest);
-    frame(CanFrame(kRpdo1, {static_cast<uint8_t>(bits), static_cast<uint8_t>(bits >> 8), static_cast<uint8_t>(d),
-                            static_cast<uint8_t>(d >> 8), static_cast<uint8_t>(d >> 16), static_cast<uint8_t>(d >> 24)}));
+    frame(CanFrame(kRpdo1, {static_cast<uint8_t>(bits), static_cast<uint8_t>(bits >> 8),
+                            static_cast<uint8_t>(d), static_cast<uint8_t>(d >> 8),
+                            static_cast<uint8_t>(d >> 16), static_cast<uint8_t>(d >> 24)}));
     advance_ms(2);
   }
   // The register and the history after the reset: nothing active, one error recorded.
@@ -37,22 +38,25 @@ class EmcyErrorReset : public NodeHarness {
 
 TEST_F(EmcyErrorReset, RpdoTooShortUntilTheNextRpdoOfTheRightLength) {
   size_t from = sent.size();
-  frame(CanFrame(kRpdo1, {0x00, 0x00}));  // 2 bytes for a 6-byte mapping
-  frame(CanFrame(kRpdo1, {0x00, 0x00}));  // still active: not sent again
+  frame(CanFrame(kRpdo1, {0x00, 0x00}));   // 2 bytes for a 6-byte mapping
+  frame(CanFrame(kRpdo1, {0x00, 0x00}));   // still active: not sent again
   EXPECT_EQ(*sdo_read(0x1001, 0), 0x11u);  // generic + communication
   rpdo1(0, 0);
   // 0x8210, register 0x11, COB-ID 0x0205 LE, 2 bytes received; then the reset.
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(0x85, {0x10, 0x82, 0x11, 0x05, 0x02, 0x02, 0x00, 0x00}),
-                                                kErrorReset}));
+  EXPECT_EQ(emcys(from),
+            (std::vector<CanFrame>{CanFrame(0x85, {0x10, 0x82, 0x11, 0x05, 0x02, 0x02, 0x00, 0x00}),
+                                   kErrorReset}));
   expect_consistent_after_reset(0x8210);
 }
 
 TEST_F(EmcyErrorReset, RpdoTooLongUntilTheNextRpdoOfTheRightLength) {
   size_t from = sent.size();
-  frame(CanFrame(kRpdo1, {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}));  // 8 for 6: applied, reported
+  frame(CanFrame(kRpdo1,
+                 {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}));  // 8 for 6: applied, reported
   rpdo1(0, 0);
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(0x85, {0x20, 0x82, 0x11, 0x05, 0x02, 0x08, 0x00, 0x00}),
-                                                kErrorReset}));
+  EXPECT_EQ(emcys(from),
+            (std::vector<CanFrame>{CanFrame(0x85, {0x20, 0x82, 0x11, 0x05, 0x02, 0x08, 0x00, 0x00}),
+                                   kErrorReset}));
   expect_consistent_after_reset(0x8220);
 }
 
@@ -78,7 +82,8 @@ TEST_F(EmcyErrorReset, ErrorPassiveUntilErrorActive) {
   size_t from = sent.size();
   device->on_bus_event(BusEvent::ErrorPassive, t);
   device->on_bus_event(BusEvent::ErrorActive, t);
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(0x85, {0x20, 0x81, 0x11, 0, 0, 0, 0, 0}), kErrorReset}));
+  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(0x85, {0x20, 0x81, 0x11, 0, 0, 0, 0, 0}),
+                                                kErrorReset}));
   expect_consistent_after_reset(0x8120);
 }
 
@@ -119,7 +124,8 @@ TEST_F(EmcyErrorReset, HeartbeatConsumerUntilTheHeartbeatIsBack) {
   advance_ms(150);
   frame(CanFrame(0x720, {0x05}));
   // 0x8130, register 0x11, manufacturer byte 0: the node lost.
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(0x85, {0x30, 0x81, 0x11, 0x20, 0, 0, 0, 0}), kErrorReset}));
+  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{
+                             CanFrame(0x85, {0x30, 0x81, 0x11, 0x20, 0, 0, 0, 0}), kErrorReset}));
   expect_consistent_after_reset(0x8130);
 }
 

@@ -30,7 +30,9 @@ class ForeignFrameTest : public NodeHarness {
   void jog() {
     using namespace horner::obj;
     nmt(0x01);
-    ASSERT_EQ(sdo_write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, 0, 1), 0u);
+    ASSERT_EQ(sdo_write(sim::obj::index(0, sim::obj::kSwitches),
+                        sim::switches_sub::kUpperLimitEnabled, 0, 1),
+              0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, horner::command::kClearErrors, 2), 0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, 0, 2), 0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, horner::command::kJogUp, 2), 0u);

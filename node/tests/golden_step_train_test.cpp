@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "node/tests/node_harness.hpp"
 #include "node/profiles/horner/bits.hpp"
 #include "node/profiles/horner/objects.hpp"
-#include "node/profiles/sim/objects.hpp"
 #include "node/profiles/hp44714a/objects.hpp"
+#include "node/profiles/sim/objects.hpp"
+#include "node/tests/node_harness.hpp"
 
 #ifndef STEPNODE_GOLDEN_DIR
 #error "STEPNODE_GOLDEN_DIR: the directory of the recorded trains"
@@ -33,7 +33,9 @@ namespace hp_obj = hp44714a::obj;
 namespace cmd = horner::command;
 using Train = std::vector<sim::TracedStep>;
 
-std::string golden_path(const std::string& name) { return std::string(STEPNODE_GOLDEN_DIR) + "/" + name + ".train"; }
+std::string golden_path(const std::string& name) {
+  return std::string(STEPNODE_GOLDEN_DIR) + "/" + name + ".train";
+}
 
 void write_train(const std::string& name, const Train& train) {
   std::ofstream out(golden_path(name));
@@ -113,7 +115,8 @@ class GoldenTrains : public NodeHarness, public ::testing::WithParamInterface<ui
     ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kCommandBits), 0, held, 2), 0u);
   }
   void destination(int32_t d) {
-    ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kDestination), 0, static_cast<uint32_t>(d)), 0u);
+    ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kDestination), 0, static_cast<uint32_t>(d)),
+              0u);
   }
   void profile_word(uint8_t sub, uint16_t v) {
     ASSERT_EQ(sdo_write(axis_obj::index(0, axis_obj::kProfile), sub, v, 2), 0u);

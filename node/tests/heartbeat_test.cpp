@@ -148,8 +148,8 @@ TEST_F(HeartbeatConsumerTest, AnyHeartbeatOfTheNodeKeepsItAliveOthersDoNot) {
   heartbeat_of(0x20, 0x7F);
   for (int i = 0; i < 20; ++i) {
     advance_ms(250);
-    heartbeat_of(0x21);            // another node
-    frame(CanFrame(0x720, {}));    // not a heartbeat: no data byte
+    heartbeat_of(0x21);          // another node
+    frame(CanFrame(0x720, {}));  // not a heartbeat: no data byte
     heartbeat_of(0x20, i % 2 ? 0x05 : 0x04);
   }
   EXPECT_TRUE(lost.empty());

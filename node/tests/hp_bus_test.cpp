@@ -8,8 +8,8 @@
 #include <cmath>
 #include <memory>
 
-#include "node/tests/node_harness.hpp"
 #include "node/profiles/hp44714a/objects.hpp"
+#include "node/tests/node_harness.hpp"
 
 namespace stepnode::node::test {
 namespace {
@@ -31,7 +31,8 @@ class HpBus : public NodeHarness {
   }
 
   // The manual's words as object writes.
-  uint32_t profile(uint8_t mode, double min, double max, double slope, double last, unsigned a = 0) {
+  uint32_t profile(uint8_t mode, double min, double max, double slope, double last,
+                   unsigned a = 0) {
     uint16_t p = index(a, kProfile);
     EXPECT_EQ(put_int<uint8_t>(p, hp44714a::profile_sub::kMode, mode), 0u);
     EXPECT_EQ(put(p, hp44714a::profile_sub::kMin, min), 0u);
@@ -42,7 +43,8 @@ class HpBus : public NodeHarness {
   }
   uint32_t move(double d, bool abs = false, bool nowait = false, unsigned a = 0) {
     EXPECT_EQ(put_int<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait, nowait ? 1 : 0), 0u);
-    return put(index(a, kMove), abs ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative, d);
+    return put(index(a, kMove), abs ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative,
+               d);
   }
   uint32_t sustain(double v, bool nowait = false, unsigned a = 0) {
     EXPECT_EQ(put_int<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait, nowait ? 1 : 0), 0u);
@@ -51,7 +53,6 @@ class HpBus : public NodeHarness {
   uint32_t trig(uint8_t mode, unsigned a = 0) { return sdo_write(index(a, kTrig), 0, mode, 1); }
   // HP-IB "WAIT n" / the operator's PAUSE: virtual time passes.
   void wait_s(double s) { advance_us(static_cast<uint64_t>(s * 1e6)); }
-
 };
 
 constexpr uint32_t kDeviceState = 0x08000022, kIncompatible = 0x06040043;
@@ -98,7 +99,9 @@ TEST_F(HpBus, Figure3_3SendingPulsesToAMotor) {
   EXPECT_EQ(mechanical(), -100);
   wait_s(3);
   EXPECT_EQ(mechanical(), 100);
-  EXPECT_EQ(static_cast<int32_t>(*sdo_read(index(0, kTiming), hp44714a::timing_sub::kFirstStepAfterTriggerUs)) / 1000,
+  EXPECT_EQ(static_cast<int32_t>(
+                *sdo_read(index(0, kTiming), hp44714a::timing_sub::kFirstStepAfterTriggerUs)) /
+                1000,
             5000 + 10 - 1);  // DELAY 5 s, then the first pulse at 100 Hz rising (just under 10 ms)
   // 120 MOVE -30 NOWAIT / 130 TRIG / 150 TRIG AUTO
   ASSERT_EQ(move(-30, false, true), 0u);
@@ -153,8 +156,8 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
   auto tpdos = with_id(kTpdo4, from);
   ASSERT_FALSE(tpdos.empty());
   EXPECT_EQ(tpdos.back().dlc, 3);
-  EXPECT_EQ(tpdos.back().data[0], 0);  // DONE? 0
-  EXPECT_EQ(tpdos.back().data[2], 1);  // event: pulses stopped after a MOVE
+  EXPECT_EQ(tpdos.back().data[0], 0);                         // DONE? 0
+  EXPECT_EQ(tpdos.back().data[2], 1);                         // event: pulses stopped after a MOVE
   EXPECT_EQ(*sdo_read(in, hp44714a::intr_sub::kEnable), 0u);  // disabled once sent
   ASSERT_EQ(sdo_write(in, hp44714a::intr_sub::kEnable, 1, 1), 0u);
   from = sent.size();
@@ -168,7 +171,8 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
     if (tpdos[i].data[2] == 2) {
       reached = true;
       EXPECT_EQ(static_cast<int8_t>(tpdos[i].data[0]), -1);  // SUSTAIN running
-      EXPECT_NEAR(static_cast<double>(times[i] - sustain_at) / 1e6, 4.0, 0.01);  // 1000 Hz / 250 Hz/s
+      EXPECT_NEAR(static_cast<double>(times[i] - sustain_at) / 1e6, 4.0,
+                  0.01);  // 1000 Hz / 250 Hz/s
     }
   EXPECT_TRUE(reached);
   ASSERT_EQ(sdo_write(in, hp44714a::intr_sub::kEnable, 1, 1), 0u);
@@ -185,7 +189,7 @@ TEST_F(HpBus, InterruptExampleAsTpdoAndEmcy) {
 
 TEST_F(HpBus, PscaleRoundOffExamplesRelAndAbs) {
   ASSERT_EQ(put(index(0, kPosition), 0, 0), 0u);  // POS 0
-  ASSERT_EQ(put(index(0, kPscale), 0, 2), 0u);     // PSCALE 2
+  ASSERT_EQ(put(index(0, kPscale), 0, 2), 0u);    // PSCALE 2
   for (double expected : {2.0, 4.0, 6.0}) {
     ASSERT_EQ(move(1), 0u);  // MOVE 1 REL
     wait_s(1);
@@ -315,7 +319,8 @@ TEST_F(HpBus, TrigSysStartsTwoAxesOnOneSync) {
     EXPECT_EQ(done(a), 0);
     EXPECT_EQ(mechanical(a), 50);
     first[a] = *sdo_read(index(a, kTiming), hp44714a::timing_sub::kFirstStepUs);
-    EXPECT_EQ(*sdo_read(index(a, kTiming), hp44714a::timing_sub::kTriggerUs), static_cast<uint32_t>(sync_at));
+    EXPECT_EQ(*sdo_read(index(a, kTiming), hp44714a::timing_sub::kTriggerUs),
+              static_cast<uint32_t>(sync_at));
   }
   EXPECT_EQ(first[0], first[1]);
   // The power-on profile starts from 0 Hz at 500 Hz/s: the first step 63.2 ms after SYNC.
@@ -326,8 +331,10 @@ TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
   ASSERT_EQ(trig(3), 0u);
   ASSERT_EQ(move(5, false, true), 0u);
   advance_us(3'000);
-  device->on_frame(CanFrame(0x80, {}), t, t - 700);  // it reached the socket 700 us before it was read
-  EXPECT_EQ(*sdo_read(index(0, kTiming), hp44714a::timing_sub::kTriggerUs), static_cast<uint32_t>(t - 700));
+  device->on_frame(CanFrame(0x80, {}), t,
+                   t - 700);  // it reached the socket 700 us before it was read
+  EXPECT_EQ(*sdo_read(index(0, kTiming), hp44714a::timing_sub::kTriggerUs),
+            static_cast<uint32_t>(t - 700));
   wait_s(1);
   EXPECT_EQ(mechanical(), 5);
 }
@@ -339,7 +346,7 @@ TEST_F(HpBus, StoredSettingsComeBackAfterResetNode) {
   ASSERT_EQ(put(index(0, kPscale), 0, 0.5), 0u);
   ASSERT_EQ(sdo_write(index(0, kDelay), 0, 250, 2), 0u);
   ASSERT_EQ(sdo_write(0x1010, 1, 0x65766173), 0u);  // "save"
-  nmt(0x81);  // reset node
+  nmt(0x81);                                        // reset node
   advance_us(10'000);
   nmt(0x01);
   EXPECT_EQ(get(index(0, kPscale)), 0.5);

@@ -47,7 +47,7 @@ TEST_F(LssNodeTest, WithoutNodeIdTheNodeIsSilentButForLss) {
   EXPECT_EQ(node->state(), NmtState::Initialising);
   advance_ms(3000);
   frame(CanFrame(0x600 + 0x7F, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));  // SDO to any id
-  frame(CanFrame(0, {0x01, 0x00}));                                       // NMT start, broadcast
+  frame(CanFrame(0, {0x01, 0x00}));                                     // NMT start, broadcast
   EXPECT_TRUE(sent.empty()) << "no boot-up, heartbeat, SDO answer or EMCY without a node-ID";
   EXPECT_EQ(node->state(), NmtState::Initialising);
   frame(lss({0x4C}));  // identify non-configured remote slave
@@ -114,8 +114,8 @@ TEST_F(LssNodeTest, AConfiguredNodeTakesANewNodeIdAtResetCommunication) {
   make_node(kId, NodeIdOrigin::CommandLine);
   // Switch state selective by the identity of 0x1018, as a master that knows it does.
   const auto u32 = [](uint8_t cs, uint32_t v) {
-    return lss({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8), static_cast<uint8_t>(v >> 16),
-                static_cast<uint8_t>(v >> 24)});
+    return lss({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
+                static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 24)});
   };
   const od::DeviceInfo& d = node->device_info();
   clear_sent();
@@ -173,13 +173,13 @@ TEST_F(LssNodeTest, BackToBackRequestsAreEachAnswered) {
   for (uint8_t cs : {0x5A, 0x5B, 0x5C, 0x5D, 0x5E, 0x11, 0x5E}) frame(lss({cs, 0x07}));
   const od::DeviceInfo& d = node->device_info();
   auto u32 = [](uint8_t cs, uint32_t v) {
-    return lss_answer({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8), static_cast<uint8_t>(v >> 16),
-                       static_cast<uint8_t>(v >> 24)});
+    return lss_answer({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
+                       static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 24)});
   };
-  EXPECT_EQ(with_id(kLssTx),
-            (std::vector<CanFrame>{u32(0x5A, d.vendor_id), u32(0x5B, d.product_code), u32(0x5C, d.revision),
-                                   u32(0x5D, kSerial), lss_answer({0x5E, kId}), lss_answer({0x11, 0x00}),
-                                   lss_answer({0x5E, kId})}));
+  EXPECT_EQ(with_id(kLssTx), (std::vector<CanFrame>{
+                                 u32(0x5A, d.vendor_id), u32(0x5B, d.product_code),
+                                 u32(0x5C, d.revision), u32(0x5D, kSerial), lss_answer({0x5E, kId}),
+                                 lss_answer({0x11, 0x00}), lss_answer({0x5E, kId})}));
 }
 
 TEST_F(LssNodeTest, LssWorksInNmtStopped) {

@@ -29,8 +29,8 @@ CanFrame answer(std::initializer_list<uint8_t> bytes) {
   return f;
 }
 CanFrame with_u32(uint8_t cs, uint32_t v) {
-  return request({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8), static_cast<uint8_t>(v >> 16),
-                  static_cast<uint8_t>(v >> 24)});
+  return request({cs, static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
+                  static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 24)});
 }
 
 constexpr lss::Identity kIdentity{0x12345678, 0x53544550, 0x00010002, 0x000000A1};
@@ -84,7 +84,8 @@ TEST_F(LssSlaveTest, ConfigurationServicesAreSilentWhileWaiting) {
 
 TEST_F(LssSlaveTest, ConfigureNodeIdAnswersErrorCodeAndChangesOnlyThePendingId) {
   to_configuration();
-  EXPECT_EQ(send(request({0x11, 0x07})), answer({0x11, 0x00}));  // 0: protocol successfully completed
+  EXPECT_EQ(send(request({0x11, 0x07})),
+            answer({0x11, 0x00}));  // 0: protocol successfully completed
   EXPECT_EQ(slave.pending_node_id(), 7);
   EXPECT_EQ(slave.active_node_id(), 5);
   EXPECT_EQ(send(request({0x5E})), answer({0x5E, 0x05}));  // still the active one
@@ -139,8 +140,10 @@ TEST_F(LssSlaveTest, StoreConfigurationStoresThePendingValues) {
 }
 
 TEST_F(LssSlaveTest, SwitchStateSelectiveNeedsAllFourPartsInOrder) {
-  const CanFrame vendor = with_u32(0x40, kIdentity.vendor_id), product = with_u32(0x41, kIdentity.product_code),
-                 revision = with_u32(0x42, kIdentity.revision_number), serial = with_u32(0x43, kIdentity.serial_number);
+  const CanFrame vendor = with_u32(0x40, kIdentity.vendor_id),
+                 product = with_u32(0x41, kIdentity.product_code),
+                 revision = with_u32(0x42, kIdentity.revision_number),
+                 serial = with_u32(0x43, kIdentity.serial_number);
   EXPECT_FALSE(send(vendor));
   EXPECT_FALSE(send(product));
   EXPECT_FALSE(send(revision));
@@ -150,7 +153,8 @@ TEST_F(LssSlaveTest, SwitchStateSelectiveNeedsAllFourPartsInOrder) {
   send(request({0x04, 0x00}));
   for (const CanFrame& f : {vendor, revision, serial}) EXPECT_FALSE(send(f));  // product skipped
   EXPECT_EQ(slave.state(), lss::State::Waiting);
-  for (const CanFrame& f : {vendor, product, revision, with_u32(0x43, 0xA2)}) EXPECT_FALSE(send(f));  // another serial
+  for (const CanFrame& f : {vendor, product, revision, with_u32(0x43, 0xA2)})
+    EXPECT_FALSE(send(f));  // another serial
   EXPECT_EQ(slave.state(), lss::State::Waiting);
   // A wrong part ends the sequence: the right ones after it do not complete it.
   for (const CanFrame& f : {vendor, with_u32(0x41, 1), revision, serial}) EXPECT_FALSE(send(f));
@@ -163,8 +167,9 @@ TEST_F(LssSlaveTest, SwitchStateSelectiveNeedsAllFourPartsInOrder) {
 TEST_F(LssSlaveTest, IdentifyRemoteSlaveMatchesRangesInBothStates) {
   auto identify = [&](uint32_t rev_lo, uint32_t rev_hi, uint32_t ser_lo, uint32_t ser_hi) {
     std::optional<CanFrame> r;
-    for (const CanFrame& f : {with_u32(0x46, kIdentity.vendor_id), with_u32(0x47, kIdentity.product_code),
-                              with_u32(0x48, rev_lo), with_u32(0x49, rev_hi), with_u32(0x4A, ser_lo)})
+    for (const CanFrame& f :
+         {with_u32(0x46, kIdentity.vendor_id), with_u32(0x47, kIdentity.product_code),
+          with_u32(0x48, rev_lo), with_u32(0x49, rev_hi), with_u32(0x4A, ser_lo)})
       EXPECT_FALSE(send(f));
     return send(with_u32(0x4B, ser_hi));
   };
@@ -262,7 +267,7 @@ TEST(LssFastScan, FindsEachUnconfiguredSlaveInTurnAndEachGetsItsNodeId) {
   Bus bus;
   bus.add(0x000000A1);
   bus.add(0x000000A2);
-  bus.add(0x001000A1);  // differs from the first in one high bit only
+  bus.add(0x001000A1);        // differs from the first in one high bit only
   bus.add(0x000000A0, 0x20);  // configured: never takes part
   std::vector<uint32_t> serials;
   for (uint8_t next_id = 1; next_id <= 3; ++next_id) {
@@ -272,8 +277,9 @@ TEST(LssFastScan, FindsEachUnconfiguredSlaveInTurnAndEachGetsItsNodeId) {
     std::vector<CanFrame> r = bus.send(request({0x5D}));
     ASSERT_EQ(r.size(), 1u);
     const uint32_t serial = found->serial_number;
-    EXPECT_EQ(r[0], answer({0x5D, static_cast<uint8_t>(serial), static_cast<uint8_t>(serial >> 8),
-                            static_cast<uint8_t>(serial >> 16), static_cast<uint8_t>(serial >> 24)}));
+    EXPECT_EQ(r[0],
+              answer({0x5D, static_cast<uint8_t>(serial), static_cast<uint8_t>(serial >> 8),
+                      static_cast<uint8_t>(serial >> 16), static_cast<uint8_t>(serial >> 24)}));
     EXPECT_EQ(found->vendor_id, kIdentity.vendor_id);
     EXPECT_EQ(found->product_code, kIdentity.product_code);
     EXPECT_EQ(found->revision_number, kIdentity.revision_number);
@@ -298,8 +304,9 @@ TEST(LssFastScan, ASlaveAnswersOnlyWhileItsBitsMatchAndItsPositionIsAsked) {
   // Vendor-ID 0x12345678: bits 31..28 are 0001.
   EXPECT_TRUE(slave.on_frame(fast_scan(0x10000000, 28, 0, 0)).response);
   EXPECT_FALSE(slave.on_frame(fast_scan(0x20000000, 28, 0, 0)).response);
-  EXPECT_FALSE(slave.on_frame(fast_scan(0x12345678, 0, 1, 1)).response);  // not at the product code yet
-  EXPECT_TRUE(slave.on_frame(fast_scan(0x12345678, 0, 0, 1)).response);  // vendor confirmed
+  EXPECT_FALSE(
+      slave.on_frame(fast_scan(0x12345678, 0, 1, 1)).response);  // not at the product code yet
+  EXPECT_TRUE(slave.on_frame(fast_scan(0x12345678, 0, 0, 1)).response);   // vendor confirmed
   EXPECT_FALSE(slave.on_frame(fast_scan(0x12345678, 0, 0, 1)).response);  // now at position 1
   EXPECT_TRUE(slave.on_frame(fast_scan(kIdentity.product_code, 0, 1, 2)).response);
   EXPECT_TRUE(slave.on_frame(fast_scan(kIdentity.revision_number, 0, 2, 3)).response);

@@ -73,8 +73,8 @@ TEST_F(NmtTest, FirstStartWithoutStoredFileHasNoErrorAndStartWorks) {
 TEST_F(NmtTest, EveryCommandFromEveryState) {
   for (NmtState from : kStates) {
     for (uint8_t cs : kCommands) {
-      SCOPED_TRACE(testing::Message() << "from " << state_name(from) << ", command 0x" << std::hex
-                                      << int(cs));
+      SCOPED_TRACE(testing::Message()
+                   << "from " << state_name(from) << ", command 0x" << std::hex << int(cs));
       make();
       go_to(from);
       advance_ms(10);
@@ -106,8 +106,8 @@ TEST_F(NmtTest, EveryCommandFromEveryState) {
 TEST_F(NmtTest, BroadcastNodeZeroAppliesEveryCommand) {
   for (NmtState from : kStates) {
     for (uint8_t cs : kCommands) {
-      SCOPED_TRACE(testing::Message() << "from " << state_name(from) << ", broadcast 0x"
-                                      << std::hex << int(cs));
+      SCOPED_TRACE(testing::Message()
+                   << "from " << state_name(from) << ", broadcast 0x" << std::hex << int(cs));
       make();
       go_to(from);
       clear_sent();
@@ -123,11 +123,10 @@ TEST_F(NmtTest, BroadcastNodeZeroAppliesEveryCommand) {
 TEST_F(NmtTest, CommandsForOtherNodesAreIgnored) {
   for (NmtState from : kStates) {
     for (uint8_t cs : kCommands) {
-      for (uint8_t other : {uint8_t{1}, uint8_t{4}, uint8_t{6}, uint8_t{127}, uint8_t{128},
-                            uint8_t{255}}) {
-        SCOPED_TRACE(testing::Message() << "from " << state_name(from) << ", command 0x"
-                                        << std::hex << int(cs) << " for node " << std::dec
-                                        << int(other));
+      for (uint8_t other :
+           {uint8_t{1}, uint8_t{4}, uint8_t{6}, uint8_t{127}, uint8_t{128}, uint8_t{255}}) {
+        SCOPED_TRACE(testing::Message() << "from " << state_name(from) << ", command 0x" << std::hex
+                                        << int(cs) << " for node " << std::dec << int(other));
         make();
         ASSERT_EQ(sdo_write(0x2F00, 1, 0x1234), 0u);
         go_to(from);
@@ -168,7 +167,7 @@ TEST_F(NmtTest, MalformedCommandsAreIgnored) {
 
 TEST_F(NmtTest, StoppedAnswersOnlyNmtAndErrorControl) {
   map_rpdo(0, {0x2F000120}, 255);
-  map_tpdo(0, {0x2F000220}, 1);  // on SYNC
+  map_tpdo(0, {0x2F000220}, 1);    // on SYNC
   map_tpdo(1, {0x2F000320}, 254);  // on change
   nmt(kStop);
   clear_sent();

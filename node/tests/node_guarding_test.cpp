@@ -48,7 +48,7 @@ TEST_F(NodeGuardingTest, AnswersStateWithAToggleThatStartsAtZero) {
   EXPECT_EQ(guard(), 0x84);  // stopped: error control still runs
   nmt(0x80);
   EXPECT_EQ(guard(), 0x7F);  // enter pre-operational does not reset the toggle
-  nmt(0x82);                  // reset communication does
+  nmt(0x82);                 // reset communication does
   EXPECT_EQ(guard(), 0x7F);
   EXPECT_EQ(guard(), 0xFF);
 }
@@ -104,7 +104,7 @@ TEST_F(NodeGuardingTest, LifeGuardingLossIsACommunicationErrorAndTheNextRequestE
   advance_ms(2);
   auto e = emcys(before);
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(emcy_code(e[0]), 0x8130);  // life guard error or heartbeat error
+  EXPECT_EQ(emcy_code(e[0]), 0x8130);    // life guard error or heartbeat error
   EXPECT_EQ(e[0].data[2] & 0x10, 0x10);  // error register: communication
   EXPECT_EQ(app.guarding_lost, 1);
   EXPECT_EQ(node->state(), NmtState::PreOperational);  // 0x1029 sub 1 = 0
@@ -126,8 +126,8 @@ TEST_F(NodeGuardingTest, LifeGuardingLostRampsTheAxesDownAsALostMasterDoes) {
   ASSERT_EQ(sdo_write(commands, 0, horner::command::kClearErrors, 2), 0u);
   ASSERT_EQ(sdo_write(commands, 0, 0, 2), 0u);
   ASSERT_EQ(sdo_write(0x100C, 0, 50, 2), 0u);
-  ASSERT_EQ(sdo_write(0x100D, 0, 4, 1), 0u);   // 200 ms
-  ASSERT_EQ(sdo_write(0x1029, 1, 1, 1), 0u);   // no change of NMT state: only the policy acts
+  ASSERT_EQ(sdo_write(0x100D, 0, 4, 1), 0u);  // 200 ms
+  ASSERT_EQ(sdo_write(0x1029, 1, 1, 1), 0u);  // no change of NMT state: only the policy acts
   nmt(0x01);
   ASSERT_EQ(sdo_write(commands, 0, horner::command::kJogUp, 2), 0u);
   for (int i = 0; i < 10; ++i) {

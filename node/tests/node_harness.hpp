@@ -118,8 +118,8 @@ class NodeHarness : public ::testing::Test {
   // Expedited SDO upload. Returns the value, or nullopt (then *abort is set).
   std::optional<uint32_t> sdo_read(uint16_t index, uint8_t sub, uint32_t* abort = nullptr) {
     size_t before = sent.size();
-    frame(CanFrame(kSdoRx, {0x40, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8), sub,
-                            0, 0, 0, 0}));
+    frame(CanFrame(kSdoRx, {0x40, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8),
+                            sub, 0, 0, 0, 0}));
     auto [code, value] = sdo_answer(before, index, sub, 0x40);
     if (abort) *abort = code;
     if (code != 0) return std::nullopt;
@@ -131,9 +131,11 @@ class NodeHarness : public ::testing::Test {
   od::SdoResult transfer(bool download, uint16_t index, uint8_t sub, od::Bytes data = {}) {
     od::SdoClient client(kSdoRx, kSdoTx);
     std::vector<CanFrame> out;
-    if (download) client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
+    if (download)
+      client.start_download(index, sub, std::move(data), od::SdoClient::Mode::Auto, t, out);
     else client.start_upload(index, sub, od::SdoClient::Mode::Auto, t, out);
-    for (int guard = 0; guard < 100000 && !client.done(); ++guard) {  // the EDS: thousands of segments
+    for (int guard = 0; guard < 100000 && !client.done();
+         ++guard) {  // the EDS: thousands of segments
       std::vector<CanFrame> requests;
       requests.swap(out);
       for (const CanFrame& f : requests) {

@@ -24,7 +24,9 @@ TEST_F(NodeIdConflictTest, AHeartbeatWithItsIdAfterTheClaimPeriodIsReportedAndTh
   size_t from = sent.size();
   frame(CanFrame(kHeartbeatId, {0x05}));
   // 0x8100, register 0x11 (generic, communication), 0x0705, kept.
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x00, 0x00, 0x00})}));
+  EXPECT_EQ(
+      emcys(from),
+      (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x00, 0x00, 0x00})}));
   EXPECT_EQ(*sdo_read(0x1001, 0), 0x11u);
   EXPECT_EQ(*sdo_read(0x1003, 1), 0x07058100u);  // the code and the first two manufacturer bytes
   EXPECT_TRUE(node->configured());
@@ -47,7 +49,9 @@ TEST_F(NodeIdConflictTest, WithinTheClaimPeriodTheNodeYieldsAndWaitsForLss) {
   advance_ms(500);
   size_t from = sent.size();
   frame(CanFrame(kHeartbeatId, {0x05}));  // a device that was there first
-  EXPECT_EQ(emcys(from), (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x01, 0x00, 0x00})}));
+  EXPECT_EQ(
+      emcys(from),
+      (std::vector<CanFrame>{CanFrame(kEmcyId, {0x00, 0x81, 0x11, 0x05, 0x07, 0x01, 0x00, 0x00})}));
   EXPECT_FALSE(node->configured());
   from = sent.size();
   advance_ms(3000);
@@ -70,10 +74,11 @@ TEST_F(NodeIdConflictTest, SdoAnswersAndEmcysOfAnotherDeviceCountRemoteFramesDoN
   CanFrame guard(kHeartbeatId, {});
   guard.rtr = true;
   size_t from = sent.size();
-  frame(guard);  // a node guarding request
+  frame(guard);                                                   // a node guarding request
   frame(CanFrame(kSdoRx, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));  // a request to us
   EXPECT_TRUE(emcys(from).empty());
-  frame(CanFrame(kSdoTx, {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x04, 0x00}));  // somebody's answer as us
+  frame(CanFrame(kSdoTx,
+                 {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x04, 0x00}));  // somebody's answer as us
   ASSERT_EQ(emcys(from).size(), 1u);
   EXPECT_EQ(emcys(from)[0].data[3], 0x85);
   EXPECT_EQ(emcys(from)[0].data[4], 0x05);

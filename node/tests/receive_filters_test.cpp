@@ -15,11 +15,12 @@ namespace {
 using F = ReceiveFilter::Frames;
 
 std::vector<ReceiveFilter> bare_node_5() {
-  return {{0x000, F::Data}, {0x080, F::Data}, {0x085, F::Data}, {0x100, F::Data},
+  return {{0x000, F::Data}, {0x080, F::Data}, {0x085, F::Data},          {0x100, F::Data},
           {0x585, F::Data}, {0x605, F::Data}, {0x705, F::DataAndRemote}, {0x7E5, F::Data}};
 }
 
-std::vector<ReceiveFilter> with(std::vector<ReceiveFilter> list, std::initializer_list<ReceiveFilter> more) {
+std::vector<ReceiveFilter> with(std::vector<ReceiveFilter> list,
+                                std::initializer_list<ReceiveFilter> more) {
   list.insert(list.end(), more);
   std::sort(list.begin(), list.end());
   return list;
@@ -113,7 +114,8 @@ class DeviceReceiveFilters : public NodeHarness {
 
 TEST_F(DeviceReceiveFilters, TheCurrentListIsGivenAtOnce) {
   ASSERT_EQ(lists.size(), 1u);
-  for (uint32_t id : {0x000u, 0x080u, 0x085u, 0x100u, 0x585u, 0x605u, 0x705u, 0x7E5u}) EXPECT_TRUE(has(lists[0], id)) << id;
+  for (uint32_t id : {0x000u, 0x080u, 0x085u, 0x100u, 0x585u, 0x605u, 0x705u, 0x7E5u})
+    EXPECT_TRUE(has(lists[0], id)) << id;
   EXPECT_FALSE(has(lists[0], 0x706));
   EXPECT_FALSE(has(lists[0], 0x606));
 }
@@ -138,7 +140,7 @@ TEST_F(DeviceReceiveFilters, ANewNodeIdOverLssMovesTheList) {
   frame(CanFrame(0x7E5, {0x04, 0x01, 0, 0, 0, 0, 0, 0}));  // switch state global: configuration
   frame(CanFrame(0x7E5, {0x11, 0x21, 0, 0, 0, 0, 0, 0}));  // configure node-ID 0x21
   frame(CanFrame(0x7E5, {0x04, 0x00, 0, 0, 0, 0, 0, 0}));  // waiting
-  nmt(0x82);                                                // reset communication: it takes effect
+  nmt(0x82);                                               // reset communication: it takes effect
   const auto& now = lists.back();
   for (uint32_t id : {0x0A1u, 0x5A1u, 0x621u, 0x721u}) EXPECT_TRUE(has(now, id)) << std::hex << id;
   for (uint32_t id : {0x085u, 0x585u, 0x605u, 0x705u}) EXPECT_FALSE(has(now, id)) << std::hex << id;
@@ -149,7 +151,8 @@ TEST_F(DeviceReceiveFilters, StoredParametersAreFilteredAtTheNextStart) {
   ASSERT_EQ(sdo_write(0x1010, 2, od::kSaveSignature), 0u);
   make();
   lists.clear();
-  device->set_receive_filter_sink([this](const std::vector<ReceiveFilter>& f) { lists.push_back(f); });
+  device->set_receive_filter_sink(
+      [this](const std::vector<ReceiveFilter>& f) { lists.push_back(f); });
   EXPECT_TRUE(has(lists.back(), 0x702));
 }
 

@@ -14,7 +14,7 @@ TEST_F(ReceiveOverrun, FramesTheSocketDroppedAreEmcy8110AndCountedIn2F10) {
   node->on_receive_overruns(3, t);
   auto e = emcys(from);
   ASSERT_EQ(e.size(), 1u);
-  EXPECT_EQ(emcy_code(e[0]), 0x8110);  // CiA 301: CAN overrun (objects lost)
+  EXPECT_EQ(emcy_code(e[0]), 0x8110);    // CiA 301: CAN overrun (objects lost)
   EXPECT_EQ(e[0].data[2] & 0x10, 0x10);  // communication error
   EXPECT_EQ(e[0].data[3], 3);
   EXPECT_EQ(sdo_read(0x2F10, 0), 3u);

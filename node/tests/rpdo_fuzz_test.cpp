@@ -39,9 +39,9 @@ class RpdoFuzzTest : public NodeHarness {
       }
     } else if (f.id == 0x605 && chance(70)) {
       // Plausible SDO requests at real objects.
-      static const uint8_t kCmd[] = {0x20, 0x21, 0x22, 0x23, 0x27, 0x2B, 0x2F, 0x40, 0x60, 0x70,
-                                     0x00, 0x10, 0x01, 0x11, 0xC0, 0xC2, 0xC1, 0xA0, 0xA3, 0xA2,
-                                     0xA1, 0x80, 0x41};
+      static const uint8_t kCmd[] = {0x20, 0x21, 0x22, 0x23, 0x27, 0x2B, 0x2F, 0x40,
+                                     0x60, 0x70, 0x00, 0x10, 0x01, 0x11, 0xC0, 0xC2,
+                                     0xC1, 0xA0, 0xA3, 0xA2, 0xA1, 0x80, 0x41};
       static const uint16_t kIdx[] = {0x1000, 0x1001, 0x1003, 0x1005, 0x1006, 0x1008, 0x1010,
                                       0x1011, 0x1014, 0x1015, 0x1016, 0x1017, 0x1018, 0x1019,
                                       0x1021, 0x1200, 0x1400, 0x1401, 0x1402, 0x1600, 0x1601,
@@ -75,7 +75,7 @@ bool valid_state(NmtState s) {
 TEST_F(RpdoFuzzTest, RandomFramesNeitherCrashNorCorrupt) {
   // The set-up a master would make, stored so that a random NMT reset node keeps it.
   map_rpdo(0, {0x2F000120, 0x2F000220}, 255);
-  map_rpdo(1, {0x2F000320}, 1, 50);  // synchronous, deadline 50 ms
+  map_rpdo(1, {0x2F000320}, 1, 50);            // synchronous, deadline 50 ms
   map_rpdo(2, {0x00050008, 0x2F000420}, 255);  // dummy (UNSIGNED8) + register
   map_rpdo(3, {0x00070020, 0x2F000520}, 254);  // dummy (UNSIGNED32) + register
   map_tpdo(0, {0x2F000120}, 254, 10);

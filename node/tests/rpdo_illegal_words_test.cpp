@@ -29,14 +29,16 @@ class RpdoIllegalWords : public NodeHarness {
   // RPDO1: command bits (U16) + destination (I32).
   void rpdo1(uint16_t bits, int32_t dest) {
     auto d = static_cast<uint32_t>(dest);
-    frame(CanFrame(kRpdo1, {static_cast<uint8_t>(bits), static_cast<uint8_t>(bits >> 8), static_cast<uint8_t>(d),
-                            static_cast<uint8_t>(d >> 8), static_cast<uint8_t>(d >> 16), static_cast<uint8_t>(d >> 24)}));
+    frame(CanFrame(kRpdo1, {static_cast<uint8_t>(bits), static_cast<uint8_t>(bits >> 8),
+                            static_cast<uint8_t>(d), static_cast<uint8_t>(d >> 8),
+                            static_cast<uint8_t>(d >> 16), static_cast<uint8_t>(d >> 24)}));
     advance_ms(2);
   }
   // RPDO2: velocity divisor, base, running, acceleration (U16 each).
   void rpdo2(uint16_t aq3, uint16_t aq4, uint16_t aq5, uint16_t aq6) {
-    frame(CanFrame(kRpdo2, {static_cast<uint8_t>(aq3), static_cast<uint8_t>(aq3 >> 8), static_cast<uint8_t>(aq4),
-                            static_cast<uint8_t>(aq4 >> 8), static_cast<uint8_t>(aq5), static_cast<uint8_t>(aq5 >> 8),
+    frame(CanFrame(kRpdo2, {static_cast<uint8_t>(aq3), static_cast<uint8_t>(aq3 >> 8),
+                            static_cast<uint8_t>(aq4), static_cast<uint8_t>(aq4 >> 8),
+                            static_cast<uint8_t>(aq5), static_cast<uint8_t>(aq5 >> 8),
                             static_cast<uint8_t>(aq6), static_cast<uint8_t>(aq6 >> 8)}));
     advance_ms(2);
   }

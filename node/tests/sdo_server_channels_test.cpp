@@ -16,7 +16,8 @@ constexpr uint32_t kRx3 = 0x695, kTx3 = 0x6D5;
 constexpr uint32_t kInvalidValue = 0x06090030;
 
 CanFrame upload_request(uint32_t cob_id, uint16_t index, uint8_t sub) {
-  return CanFrame(cob_id, {0x40, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8), sub, 0, 0, 0, 0});
+  return CanFrame(cob_id, {0x40, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8), sub,
+                           0, 0, 0, 0});
 }
 // Upload segment request, 7.2.4.3.7: ccs 3, toggle in bit 4.
 CanFrame segment_request(uint32_t cob_id, bool toggle) {
@@ -49,7 +50,7 @@ TEST_F(SdoServerChannelsTest, ParameterRecordsAsCia301Lays) {
   }
   uint32_t abort = 0;
   EXPECT_FALSE(sdo_read(0x1204, 0, &abort).has_value());
-  EXPECT_EQ(abort, 0x06020000u);  // no such object
+  EXPECT_EQ(abort, 0x06020000u);                        // no such object
   EXPECT_EQ(sdo_write(0x1200, 1, 0x606), 0x06010002u);  // the default channel is read-only
 }
 
@@ -136,10 +137,10 @@ TEST_F(SdoServerChannelsTest, CobIdOfAValidChannelChangesOnlyAfterBit31) {
 }
 
 TEST_F(SdoServerChannelsTest, RestrictedOrExtendedIdentifiersAreRefused) {
-  EXPECT_EQ(sdo_write(0x1201, 1, 0x605), kInvalidValue);   // 0x601..0x67F: default SDO
-  EXPECT_EQ(sdo_write(0x1201, 2, 0x705), kInvalidValue);   // 0x701..0x77F: heartbeat
+  EXPECT_EQ(sdo_write(0x1201, 1, 0x605), kInvalidValue);       // 0x601..0x67F: default SDO
+  EXPECT_EQ(sdo_write(0x1201, 2, 0x705), kInvalidValue);       // 0x701..0x77F: heartbeat
   EXPECT_EQ(sdo_write(0x1201, 1, 0x20000685), kInvalidValue);  // 29-bit frame
-  EXPECT_EQ(sdo_write(0x1201, 3, 128, 1), 0x06090031u);  // client node-ID above 127
+  EXPECT_EQ(sdo_write(0x1201, 3, 128, 1), 0x06090031u);        // client node-ID above 127
   EXPECT_EQ(sdo_write(0x1201, 3, 7, 1), 0u);
   EXPECT_EQ(sdo_write(0x1201, 1, 0x40000685), 0u);  // bit 30 dynamic: allowed
 }
@@ -156,12 +157,12 @@ TEST_F(SdoServerChannelsTest, StoredByCommunicationParametersAndRestoredToDisabl
   enable(0x1201, kRx2, kTx2);
   ASSERT_EQ(sdo_write(0x1201, 3, 9, 1), 0u);
   ASSERT_EQ(sdo_write(0x1010, 2, 0x65766173), 0u);  // "save" communication parameters
-  make();  // a new process
+  make();                                           // a new process
   EXPECT_EQ(sdo_read(0x1201, 1), kRx2);
   EXPECT_EQ(sdo_read(0x1201, 3), 9u);
   EXPECT_EQ(answer(upload_request(kRx2, 0x1201, 3), kTx2).size(), 1u);
   ASSERT_EQ(sdo_write(0x1011, 2, 0x64616F6C), 0u);  // "load": defaults after the next reset
-  nmt(0x82);  // reset communication
+  nmt(0x82);                                        // reset communication
   EXPECT_EQ(sdo_read(0x1201, 1), kInvalid);
   EXPECT_TRUE(answer(upload_request(kRx2, 0x1017, 0), kTx2).empty());
 }

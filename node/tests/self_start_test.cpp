@@ -56,13 +56,15 @@ TEST_F(SelfStartTest, TheConfigKeySetsTheDefault) {
   std::ofstream(path) << "self_start = true\n";
   std::string prog = "stepnode", a1 = "--node-id", a2 = "5", a3 = "--config", a4 = path.string(),
               a5 = "--iface", a6 = "vcan0";
-  std::vector<char*> argv{prog.data(), a1.data(), a2.data(), a3.data(), a4.data(), a5.data(), a6.data()};
+  std::vector<char*> argv{prog.data(), a1.data(), a2.data(), a3.data(),
+                          a4.data(),   a5.data(), a6.data()};
   bool exit_now = false;
   int code = 0;
   NodeConfig cfg = parse_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, code);
   cfg.options.state_dir = dir.path;
   stop();
-  device = std::make_unique<Device>(cfg.options, cfg.object_defaults, [this](const CanFrame& f) { sent.push_back(f); });
+  device = std::make_unique<Device>(cfg.options, cfg.object_defaults,
+                                    [this](const CanFrame& f) { sent.push_back(f); });
   node = &device->canopen();
   sent.clear();
   device->start(t);

@@ -180,7 +180,7 @@ TEST_F(StoreRestoreTest, ALeftoverTemporaryFileDoesNotMatter) {
   // A crash in the middle of a later save left a half-written temporary file.
   std::ofstream(tmp_file()) << "# stepnode stored parameters v1\n1017:00 f401\n10";
   make();
-  EXPECT_EQ(od().get<uint16_t>(0x1017, 0), 250);  // the real file counts
+  EXPECT_EQ(od().get<uint16_t>(0x1017, 0), 250);      // the real file counts
   EXPECT_FALSE(std::filesystem::exists(tmp_file()));  // and the leftover is cleaned up
   // The next save writes over the leftover and renames it into place.
   ASSERT_EQ(sdo_write(0x1017, 0, 260, 2), 0u);

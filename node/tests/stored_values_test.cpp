@@ -150,8 +150,9 @@ TEST_F(StoredValues, ForeignEmptyAndTruncatedFilesAreSetAside) {
   ASSERT_EQ(sdo_write(0x1010, 1, kSave), 0u);
   const std::string good = file_text();
   int n = 0;
-  for (const std::string& bad : {std::string("\0\xff\x01\n\n", 5), std::string(), good.substr(0, good.size() - 3),
-                                 good + "1017:00 f401\n", std::string("[defaults]\n\"1017\" = 250\n")}) {
+  for (const std::string& bad :
+       {std::string("\0\xff\x01\n\n", 5), std::string(), good.substr(0, good.size() - 3),
+        good + "1017:00 f401\n", std::string("[defaults]\n\"1017\" = 250\n")}) {
     write_file(bad);
     make();
     ++n;
@@ -163,7 +164,9 @@ TEST_F(StoredValues, ForeignEmptyAndTruncatedFilesAreSetAside) {
 
 TEST_F(StoredValues, AVersion1FileOfAnEarlierBuildStillLoads) {
   // Version 1 had no checksum: its readable lines load, the others are skipped.
-  write_file("# stepnode stored parameters v1\n1017:00 fa00\ngarbage line\n1017:01 zz\n2F00:01 efbeadde\n");
+  write_file(
+      "# stepnode stored parameters v1\n1017:00 fa00\ngarbage line\n1017:01 zz\n2F00:01 "
+      "efbeadde\n");
   make();
   EXPECT_EQ(od().get<uint16_t>(0x1017, 0), 250);
   EXPECT_EQ(od().get<uint32_t>(0x2F00, 1), 0xDEADBEEFu);

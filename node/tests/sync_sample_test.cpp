@@ -22,7 +22,9 @@ class SyncSampleTest : public NodeHarness {
     device->machine().axes.at(0).trace_into(&trace);
     nmt(0x01);
     ASSERT_EQ(sdo_write(0x1801, 2, 1, 1), 0u);  // TPDO2 synchronous, every SYNC
-    ASSERT_EQ(sdo_write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, 0, 1), 0u);
+    ASSERT_EQ(sdo_write(sim::obj::index(0, sim::obj::kSwitches),
+                        sim::switches_sub::kUpperLimitEnabled, 0, 1),
+              0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, horner::command::kClearErrors, 2), 0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, 0, 2), 0u);
     ASSERT_EQ(sdo_write(index(0, kCommandBits), 0, horner::command::kJogUp, 2), 0u);
@@ -49,7 +51,7 @@ class SyncSampleTest : public NodeHarness {
 
 TEST_F(SyncSampleTest, TheTpdoReportsThePositionAtTheSyncsArrival) {
   const uint64_t last_tick = t;
-  t += 4'000;  // handled 4 ms after the last tick...
+  t += 4'000;                                  // handled 4 ms after the last tick...
   const uint64_t arrival = last_tick + 1'250;  // ...but it arrived 1.25 ms after it
   const int32_t reported = sync_at(arrival);
   EXPECT_EQ(reported, steps_until(arrival));

@@ -25,7 +25,7 @@ class TimeTest : public NodeHarness {
 
 TEST_F(TimeTest, TheDefaultConsumesTimeOn0x100) {
   EXPECT_EQ(*sdo_read(0x1012, 0), 0x80000100u);  // bit 31: consumer
-  EXPECT_EQ(*sdo_read(0x2F12, 4), 0u);          // no network time yet
+  EXPECT_EQ(*sdo_read(0x2F12, 4), 0u);           // no network time yet
   EXPECT_EQ(*sdo_read(0x2F12, 1), 0u);
   frame(kJune15);
   EXPECT_EQ(*sdo_read(0x2F12, 1), kJune15Ms);
@@ -58,7 +58,7 @@ TEST_F(TimeTest, MidnightStartsTheNextDay) {
 TEST_F(TimeTest, TheFourReservedBitsAreIgnoredAndBadFramesAreNot) {
   frame(CanFrame(0x100, {0x95, 0x2C, 0xB3, 0xF2, 0xB8, 0x39}));  // bits 28..31 set
   EXPECT_EQ(*sdo_read(0x2F12, 1), kJune15Ms);
-  frame(CanFrame(0x100, {0x00, 0x00, 0x00, 0x00}));  // 4 bytes: no TIME_OF_DAY
+  frame(CanFrame(0x100, {0x00, 0x00, 0x00, 0x00}));              // 4 bytes: no TIME_OF_DAY
   frame(CanFrame(0x100, {0x00, 0x5C, 0x26, 0x05, 0x00, 0x00}));  // 86,400,000 ms: no time of day
   EXPECT_EQ(*sdo_read(0x2F12, 1), kJune15Ms);
 }

@@ -47,7 +47,8 @@ class DictionaryTest : public ::testing::Test {
     rec.add(1, "first", DT::Unsigned8, AC::ReadWrite, {1}, true);
     rec.add(3, "third", DT::Unsigned16, AC::ReadOnly, encode<uint16_t>(3));
     Object& arr = od.record(0x2200, "array", ObjectCode::Array);
-    for (uint8_t i = 1; i <= 4; ++i) arr.add(i, "element", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(i));
+    for (uint8_t i = 1; i <= 4; ++i)
+      arr.add(i, "element", DT::Unsigned32, AC::ReadWrite, encode<uint32_t>(i));
   }
 
   SdoAbort w(uint16_t index, uint8_t sub, Bytes data) { return od.write(index, sub, data); }
@@ -173,12 +174,15 @@ TEST_F(DictionaryTest, ReadingAWriteOnlyEntryIs06010001) {
 TEST_F(DictionaryTest, WritingReadOnlyOrConstIs06010002AndChangesNothing) {
   bool validated = false, written = false;
   Entry& ro = od.at(0x2001, 0);
-  ro.validate = [&](std::span<const uint8_t>) { validated = true; return SdoAbort::None; };
+  ro.validate = [&](std::span<const uint8_t>) {
+    validated = true;
+    return SdoAbort::None;
+  };
   listen(ro, [&] { written = true; });
   EXPECT_EQ(w(0x2001, 0, encode<uint32_t>(1)), SdoAbort::ReadOnly);
   EXPECT_EQ(static_cast<uint32_t>(SdoAbort::ReadOnly), 0x06010002u);
-  EXPECT_EQ(w(0x2002, 0, {1}), SdoAbort::ReadOnly);               // const
-  EXPECT_EQ(w(0x2100, 0, {5}), SdoAbort::ReadOnly);               // highest sub-index
+  EXPECT_EQ(w(0x2002, 0, {1}), SdoAbort::ReadOnly);  // const
+  EXPECT_EQ(w(0x2100, 0, {5}), SdoAbort::ReadOnly);  // highest sub-index
   EXPECT_EQ(w(0x2100, 3, encode<uint16_t>(1)), SdoAbort::ReadOnly);
   EXPECT_EQ(w(0x2001, 0, {1}), SdoAbort::ReadOnly);  // access is checked before length
   EXPECT_EQ(od.check_write_access(0x2001, 0), SdoAbort::ReadOnly);
@@ -254,7 +258,8 @@ TEST_F(DictionaryTest, TheDictionaryNeverAnswers06070010) {
 TEST_F(DictionaryTest, BooleanOtherThan0Or1Is06090030) {
   EXPECT_EQ(w(0x2004, 0, {1}), SdoAbort::None);
   EXPECT_EQ(w(0x2004, 0, {0}), SdoAbort::None);
-  for (int v : {2, 0x80, 0xFF}) EXPECT_EQ(w(0x2004, 0, {static_cast<uint8_t>(v)}), SdoAbort::InvalidValue);
+  for (int v : {2, 0x80, 0xFF})
+    EXPECT_EQ(w(0x2004, 0, {static_cast<uint8_t>(v)}), SdoAbort::InvalidValue);
   EXPECT_EQ(od.get<uint8_t>(0x2004, 0), 0);
   EXPECT_EQ(static_cast<uint32_t>(SdoAbort::InvalidValue), 0x06090030u);
 }
@@ -303,7 +308,7 @@ TEST_F(DictionaryTest, OrderAccessLengthRangeThenValidateThenStoreThenOnWritten)
     return decode<int32_t>(d) == 13 ? SdoAbort::DeviceState : SdoAbort::None;
   };
   listen(e, [&] { calls.push_back("written " + std::to_string(od.get<int32_t>(0x2005, 0))); });
-  EXPECT_EQ(w(0x2005, 0, Bytes{1}), SdoAbort::LengthTooLow);            // no hook
+  EXPECT_EQ(w(0x2005, 0, Bytes{1}), SdoAbort::LengthTooLow);              // no hook
   EXPECT_EQ(w(0x2005, 0, encode<int32_t>(500)), SdoAbort::ValueTooHigh);  // no hook
   EXPECT_TRUE(calls.empty());
   EXPECT_EQ(w(0x2005, 0, encode<int32_t>(13)), SdoAbort::DeviceState);  // refused by the hook
@@ -325,7 +330,8 @@ TEST_F(DictionaryTest, ReactionsRunInOrderAndARefusalRestoresThePreviousValue) {
   ASSERT_EQ(w(0x2005, 0, encode<int32_t>(5)), SdoAbort::None);
   EXPECT_EQ(w(0x2005, 0, encode<int32_t>(7)), SdoAbort::DeviceState);
   EXPECT_EQ(od.get<int32_t>(0x2005, 0), 5);  // the value before the refused write
-  EXPECT_EQ(calls, (std::vector<std::string>{"first sees 5", "command", "third", "first sees 7", "command"}));
+  EXPECT_EQ(calls, (std::vector<std::string>{"first sees 5", "command", "third", "first sees 7",
+                                             "command"}));
 }
 
 TEST_F(DictionaryTest, PdoWritesObeyTheSameRules) {

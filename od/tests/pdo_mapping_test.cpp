@@ -130,8 +130,9 @@ TEST_F(PdoMappingTest, WholeMappingAtMost64Bits) {
             SdoAbort::PdoTooLong);  // dummies count
   EXPECT_EQ(check_mapping(od, std::vector<uint32_t>{}, PdoDirection::Transmit), SdoAbort::None);
   // An entry error comes first, even past 64 bits.
-  EXPECT_EQ(check_mapping(od, std::vector<uint32_t>{0x20080040, 0x20050008}, PdoDirection::Transmit),
-            SdoAbort::NotMappable);
+  EXPECT_EQ(
+      check_mapping(od, std::vector<uint32_t>{0x20080040, 0x20050008}, PdoDirection::Transmit),
+      SdoAbort::NotMappable);
 }
 
 // ---- bits ---------------------------------------------------------------------------------
@@ -230,9 +231,8 @@ TEST_F(PdoMappingTest, UnpackReportsTheFirstRefusedWriteAndStoresTheOthers) {
 
 TEST_F(PdoMappingTest, ReactionsRunOnceTheWholePdoIsStoredAndOnlyForStoredEntries) {
   std::vector<std::string> calls;
-  listen(od.at(0x2000, 0), [&] {
-    calls.push_back("u8 sees u32=" + std::to_string(od.get<uint32_t>(0x2002, 0)));
-  });
+  listen(od.at(0x2000, 0),
+         [&] { calls.push_back("u8 sees u32=" + std::to_string(od.get<uint32_t>(0x2002, 0))); });
   listen(od.at(0x2002, 0), [&] { calls.push_back("u32"); });
   listen(od.at(0x200B, 0), [&] { calls.push_back("limited"); });
   // The command (u8) comes before its argument (u32) in the PDO, yet sees the new argument.
@@ -263,7 +263,8 @@ TEST(PdoRoundTrip, TransmitOnOneDeviceReceiveOnAnother) {
   Frame frame = pack_pdo(producer, map);
   EXPECT_EQ(frame, (Frame{0xC7, 0xCF, 0x5C, 0xF9, 0xEF, 0xBE, 0xAD, 0xDE}));
   EXPECT_EQ(unpack_pdo(consumer, map, frame), SdoAbort::None);
-  for (const auto& m : map) EXPECT_EQ(consumer.value(m.index, m.sub), producer.value(m.index, m.sub));
+  for (const auto& m : map)
+    EXPECT_EQ(consumer.value(m.index, m.sub), producer.value(m.index, m.sub));
 }
 
 }  // namespace

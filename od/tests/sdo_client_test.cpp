@@ -80,8 +80,7 @@ TEST_F(SdoClientTest, ExpeditedUploadSizes) {
 
 TEST_F(SdoClientTest, SegmentedUpload) {
   upload(kString, 0, Mode::Auto);
-  EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0})),
-            one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0})), one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
   EXPECT_EQ(feed(rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'})),
             one(req({0x70, 0, 0, 0, 0, 0, 0, 0})));
   EXPECT_TRUE(feed(rsp({0x1D, 'e', 0, 0, 0, 0, 0, 0})).empty());
@@ -159,9 +158,9 @@ TEST_F(SdoClientTest, BlockDownload) {
             (Frames{req({0x01, data[0], data[1], data[2], data[3], data[4], data[5], data[6]}),
                     req({0x82, data[7], data[8], data[9], 0, 0, 0, 0})}));
   uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(feed(rsp({0xA2, 2, 127, 0, 0, 0, 0, 0})),
-            one(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})));
+  EXPECT_EQ(
+      feed(rsp({0xA2, 2, 127, 0, 0, 0, 0, 0})),
+      one(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})));
   EXPECT_FALSE(client.done());
   EXPECT_TRUE(feed(rsp({0xA1, 0, 0, 0, 0, 0, 0, 0})).empty());
   EXPECT_TRUE(client.done());
@@ -177,15 +176,15 @@ TEST_F(SdoClientTest, BlockDownloadFollowsTheServersBlockSizeAndAckseq) {
   // Only segment 1 arrived: repeat from byte 7, three segments a sub-block now.
   Frames repeat = feed(rsp({0xA2, 1, 3, 0, 0, 0, 0, 0}));
   ASSERT_EQ(repeat.size(), 3u);
-  EXPECT_EQ(repeat[0], req({0x01, data[7], data[8], data[9], data[10], data[11], data[12],
-                            data[13]}));
+  EXPECT_EQ(repeat[0],
+            req({0x01, data[7], data[8], data[9], data[10], data[11], data[12], data[13]}));
   EXPECT_EQ(repeat[2].data[0], 0x03);
   Frames last = feed(rsp({0xA2, 3, 3, 0, 0, 0, 0, 0}));  // 28 bytes confirmed
   EXPECT_EQ(last, one(req({0x81, data[28], data[29], 0, 0, 0, 0, 0})));
   uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(feed(rsp({0xA2, 1, 3, 0, 0, 0, 0, 0})),  // n = 5
-            one(req({0xD5, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})));
+  EXPECT_EQ(
+      feed(rsp({0xA2, 1, 3, 0, 0, 0, 0, 0})),  // n = 5
+      one(req({0xD5, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})));
 }
 
 TEST_F(SdoClientTest, BlockDownloadProtocolErrors) {
@@ -214,9 +213,9 @@ TEST_F(SdoClientTest, BlockUpload) {
   EXPECT_EQ(feed(rsp({0x82, data[7], data[8], data[9], 0, 0, 0, 0})),
             one(req({0xA2, 2, 7, 0, 0, 0, 0, 0})));
   uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(feed(rsp({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                      0})),
-            one(req({0xA1, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_EQ(
+      feed(rsp({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      one(req({0xA1, 0, 0, 0, 0, 0, 0, 0})));
   ASSERT_TRUE(client.done());
   EXPECT_TRUE(client.result().ok());
   EXPECT_EQ(client.result().data, data);
@@ -242,9 +241,9 @@ TEST_F(SdoClientTest, BlockUploadCrcMismatchAborts) {
   feed(rsp({0xC6, 0x06, 0x20, 0x00, 3, 0, 0, 0}));
   feed(rsp({0x81, 'a', 'b', 'c', 0, 0, 0, 0}));
   uint16_t crc = crc16_ccitt(encode_string("abc")) ^ 1;
-  EXPECT_EQ(feed(rsp({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                      0})),
-            one(aborted(kString, 0, 0x05040004)));
+  EXPECT_EQ(
+      feed(rsp({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      one(aborted(kString, 0, 0x05040004)));
   expect_failed(SdoAbort::CrcError);
   EXPECT_TRUE(client.result().data.empty());
 }
@@ -262,8 +261,7 @@ TEST_F(SdoClientTest, BlockUploadFollowsAProtocolSwitch) {
   EXPECT_TRUE(feed(rsp({0x43, 0x02, 0x20, 0x00, 1, 2, 3, 4})).empty());
   EXPECT_EQ(client.result().data, (Bytes{1, 2, 3, 4}));
   upload(kString, 0, Mode::Block);
-  EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 3, 0, 0, 0})),
-            one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 3, 0, 0, 0})), one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
   feed(rsp({0x09, 'a', 'b', 'c', 0, 0, 0, 0}));
   EXPECT_EQ(client.result().data, encode_string("abc"));
 }
@@ -361,9 +359,10 @@ TEST_F(SdoClientTest, UploadSegmentWithTheWrongToggleIsIgnored) {
   EXPECT_EQ(feed(rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0})), one(req({0x60, 0, 0, 0, 0, 0, 0, 0})));
   // 7.2.4.3.7: the answer to a request with t = 0 has t = 0; 0x10 (t = 1) is not it.
   EXPECT_TRUE(feed(rsp({0x10, 'x', 'x', 'x', 'x', 'x', 'x', 'x'})).empty());
-  EXPECT_EQ(feed(rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'})), one(req({0x70, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_EQ(feed(rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'})),
+            one(req({0x70, 0, 0, 0, 0, 0, 0, 0})));
   EXPECT_TRUE(feed(rsp({0x0D, 'y', 0, 0, 0, 0, 0, 0})).empty());  // t = 0 again: stale
-  feed(rsp({0x1D, 'e', 0, 0, 0, 0, 0, 0}));  // t = 1, n = 6, c
+  feed(rsp({0x1D, 'e', 0, 0, 0, 0, 0, 0}));                       // t = 1, n = 6, c
   ASSERT_TRUE(client.result().ok());
   EXPECT_EQ(client.result().data, encode_string("stepnode"));
   EXPECT_EQ(client.result().foreign_replies, 2u);
@@ -392,7 +391,8 @@ TEST_F(SdoClientTest, BlockUploadInitiateForAnotherObjectIsIgnored) {
   upload(kDomain, 0, Mode::Block);
   // 7.2.4.3.12: 0xC6 = scs 6, sc, s, ss 0; 0x2006 is not our 0x2007.
   EXPECT_TRUE(feed(rsp({0xC6, 0x06, 0x20, 0x00, 10, 0, 0, 0})).empty());
-  EXPECT_EQ(feed(rsp({0xC6, 0x07, 0x20, 0x00, 10, 0, 0, 0})), one(req({0xA3, 0, 0, 0, 0, 0, 0, 0})));
+  EXPECT_EQ(feed(rsp({0xC6, 0x07, 0x20, 0x00, 10, 0, 0, 0})),
+            one(req({0xA3, 0, 0, 0, 0, 0, 0, 0})));
 }
 
 TEST_F(SdoClientTest, TimeoutAfterForeignRepliesSaysTheChannelWasBusy) {

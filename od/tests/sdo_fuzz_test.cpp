@@ -16,11 +16,11 @@ using namespace sdotest;
 
 // Abort codes the server may send: protocol errors and what the dictionary refuses.
 const std::set<uint32_t> kServerAborts = {
-    0x05030000, 0x05040000, 0x05040001, 0x05040002, 0x05040003, 0x05040004, 0x05040005,
-    0x06010001, 0x06010002, 0x06020000, 0x06070010, 0x06070012, 0x06070013, 0x06090011,
-    0x06090030, 0x06090031, 0x06090032};
+    0x05030000, 0x05040000, 0x05040001, 0x05040002, 0x05040003, 0x05040004,
+    0x05040005, 0x06010001, 0x06010002, 0x06020000, 0x06070010, 0x06070012,
+    0x06070013, 0x06090011, 0x06090030, 0x06090031, 0x06090032};
 
-const uint16_t kIndices[] = {kU8,   kU16,    kU32,  kI32, kRo,     kWo,
+const uint16_t kIndices[] = {kU8,     kU16,    kU32,    kI32,  kRo,  kWo,
                              kString, kDomain, kRecord, kBool, kU64, kMissing};
 
 class Fuzzer {
@@ -108,13 +108,12 @@ class SloppyClient {
     switch (phase_) {
       case Phase::DownloadSegment:
         sent_last_ = fuzz.below(8) == 0;
-        b = static_cast<uint8_t>((toggle_ ? 0x10 : 0) | (fuzz.below(4) == 0 ? fuzz.below(8) << 1 : 0) |
+        b = static_cast<uint8_t>((toggle_ ? 0x10 : 0) |
+                                 (fuzz.below(4) == 0 ? fuzz.below(8) << 1 : 0) |
                                  (sent_last_ ? 1 : 0));
         if (fuzz.below(30) == 0) b ^= 0x10;
         break;
-      case Phase::UploadSegment:
-        b = static_cast<uint8_t>(0x60 | (toggle_ ? 0x10 : 0));
-        break;
+      case Phase::UploadSegment: b = static_cast<uint8_t>(0x60 | (toggle_ ? 0x10 : 0)); break;
       case Phase::BlockDownload:
         sent_last_ = fuzz.below(12) == 0;
         b = static_cast<uint8_t>((sent_last_ ? 0x80 : 0) |
@@ -127,7 +126,8 @@ class SloppyClient {
       case Phase::BlockUploadStart: b = 0xA3; break;
       case Phase::BlockUploadAck:
         b = 0xA2;
-        f.data[1] = static_cast<uint8_t>(fuzz.below(5) == 0 ? fuzz.below(segments_ + 2u) : segments_);
+        f.data[1] =
+            static_cast<uint8_t>(fuzz.below(5) == 0 ? fuzz.below(segments_ + 2u) : segments_);
         f.data[2] = static_cast<uint8_t>(fuzz.below(20) == 0 ? fuzz.byte() : 1 + fuzz.below(127));
         break;
       case Phase::BlockUploadEnd: b = 0xA1; break;
@@ -243,10 +243,8 @@ TEST(SdoFuzz, RandomFramesNeverBreakTheClient) {
     if (client.done()) {
       const uint16_t index = kIndices[fuzz.below(std::size(kIndices))];
       const auto mode = static_cast<SdoClient::Mode>(fuzz.below(3));
-      if (fuzz.below(2))
-        client.start_upload(index, 0, mode, now, out);
-      else
-        client.start_download(index, 0, pattern(fuzz.below(40)), mode, now, out);
+      if (fuzz.below(2)) client.start_upload(index, 0, mode, now, out);
+      else client.start_download(index, 0, pattern(fuzz.below(40)), mode, now, out);
     }
     client.on_frame(fuzz.frame(kTx), now, out);
     client.on_tick(now, out);

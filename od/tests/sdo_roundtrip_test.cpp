@@ -76,8 +76,8 @@ TEST(SdoRoundTrip, TypedEntriesInEveryMode) {
     EXPECT_TRUE(link.download(kU32, 0, encode<uint32_t>(0xDEADBEEF), mode).ok());
     EXPECT_TRUE(link.download(kI32, 0, encode<int32_t>(-999), mode).ok());
     EXPECT_TRUE(link.download(kU64, 0, encode<uint64_t>(0x0102030405060708), mode).ok());
-    EXPECT_TRUE(link.download(kString, 0, encode_string("thirty characters, not one mor"), mode)
-                    .ok());
+    EXPECT_TRUE(
+        link.download(kString, 0, encode_string("thirty characters, not one mor"), mode).ok());
     EXPECT_EQ(link.upload(kU8, 0, mode).data, encode<uint8_t>(42));
     EXPECT_EQ(link.upload(kU16, 0, mode).data, encode<uint16_t>(0xABCD));
     EXPECT_EQ(link.upload(kU32, 0, mode).data, encode<uint32_t>(0xDEADBEEF));

@@ -64,8 +64,7 @@ TEST_F(SdoServerTest, SegmentedUploadWithToggleAndLastSegment) {
   EXPECT_EQ(ask(req({0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0})),
             rsp({0x41, 0x06, 0x20, 0x00, 0x08, 0, 0, 0}));
   EXPECT_TRUE(server.busy());
-  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})),
-            rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'}));
+  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})), rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'}));
   // t = 1, n = 6 unused bytes, c = 1.
   EXPECT_EQ(ask(req({0x70, 0, 0, 0, 0, 0, 0, 0})), rsp({0x1D, 'e', 0, 0, 0, 0, 0, 0}));
   EXPECT_FALSE(server.busy());
@@ -86,8 +85,7 @@ TEST_F(SdoServerTest, UploadSendsTheValueReadAtInitiate) {
   };
   EXPECT_EQ(ask(req({0x40, 0x06, 0x20, 0x00, 0, 0, 0, 0})),
             rsp({0x41, 0x06, 0x20, 0x00, 13, 0, 0, 0}));
-  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})),
-            rsp({0x00, 'v', 'a', 'l', 'u', 'e', ' ', 'r'}));
+  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})), rsp({0x00, 'v', 'a', 'l', 'u', 'e', ' ', 'r'}));
   EXPECT_EQ(ask(req({0x70, 0, 0, 0, 0, 0, 0, 0})), rsp({0x13, 'e', 'a', 'd', ' ', '#', '1', 0}));
   EXPECT_EQ(reads, 1);
 }
@@ -143,9 +141,9 @@ TEST_F(SdoServerTest, BlockDownload) {
   EXPECT_EQ(ask(req({0x82, 'a', 't', 'a', 0, 0, 0, 0})), rsp({0xA2, 2, 127, 0, 0, 0, 0, 0}));
   uint16_t crc = crc16_ccitt(encode_string("block data"));
   // n = 4 unused bytes in the last segment: 0xC1 | 4 << 2.
-  EXPECT_EQ(ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})),
-            rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(
+      ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
   EXPECT_EQ(dict.value(kString, 0), encode_string("block data"));
   EXPECT_FALSE(server.busy());
 }
@@ -155,15 +153,15 @@ TEST_F(SdoServerTest, BlockDownloadOffersTheConfiguredBlockSizeAndAcksEachSubBlo
   EXPECT_EQ(ask(req({0xC2, 0x07, 0x20, 0x00, 20, 0, 0, 0})),
             rsp({0xA0 | 0x04, 0x07, 0x20, 0x00, 2, 0, 0, 0}));
   Bytes data = pattern(20);
-  EXPECT_TRUE(send(CanFrame(kRx, {0x01, data[0], data[1], data[2], data[3], data[4], data[5],
-                                  data[6]}))
-                  .empty());
-  EXPECT_EQ(ask(CanFrame(kRx, {0x02, data[7], data[8], data[9], data[10], data[11], data[12],
-                               data[13]})),
-            rsp({0xA2, 2, 2, 0, 0, 0, 0, 0}));
-  EXPECT_EQ(ask(CanFrame(kRx, {0x81, data[14], data[15], data[16], data[17], data[18], data[19],
-                               0})),
-            rsp({0xA2, 1, 2, 0, 0, 0, 0, 0}));
+  EXPECT_TRUE(
+      send(CanFrame(kRx, {0x01, data[0], data[1], data[2], data[3], data[4], data[5], data[6]}))
+          .empty());
+  EXPECT_EQ(
+      ask(CanFrame(kRx, {0x02, data[7], data[8], data[9], data[10], data[11], data[12], data[13]})),
+      rsp({0xA2, 2, 2, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(
+      ask(CanFrame(kRx, {0x81, data[14], data[15], data[16], data[17], data[18], data[19], 0})),
+      rsp({0xA2, 1, 2, 0, 0, 0, 0, 0}));
   // No CRC from this client (cc = 0): any CRC field is accepted. n = 1.
   EXPECT_EQ(ask(req({0xC5, 0xDE, 0xAD, 0, 0, 0, 0, 0})), rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
   EXPECT_EQ(dict.value(kDomain, 0), data);
@@ -185,9 +183,9 @@ TEST_F(SdoServerTest, BlockDownloadGapIsAckedWithTheLastGoodSeqno) {
   EXPECT_TRUE(send(seg(0x01, 1)).empty());  // duplicate: ignored
   EXPECT_EQ(ask(seg(0x82, 2)), rsp({0xA2, 2, 127, 0, 0, 0, 0, 0}));
   uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(ask(req({0xC1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})),
-            rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(
+      ask(req({0xC1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
   EXPECT_EQ(dict.value(kDomain, 0), data);
 }
 
@@ -237,8 +235,7 @@ TEST_F(SdoServerTest, BlockUploadSwitchesProtocolAtOrBelowPst) {
   EXPECT_FALSE(server.busy());
   EXPECT_EQ(ask(req({0xA4, 0x06, 0x20, 0x00, 127, 21, 0, 0})),
             rsp({0x41, 0x06, 0x20, 0x00, 8, 0, 0, 0}));
-  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})),
-            rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'}));
+  EXPECT_EQ(ask(req({0x60, 0, 0, 0, 0, 0, 0, 0})), rsp({0x00, 's', 't', 'e', 'p', 'n', 'o', 'd'}));
   EXPECT_EQ(ask(req({0xA4, 0x06, 0x20, 0x00, 127, 7, 0, 0})),  // 8 bytes > pst 7
             rsp({0xC6, 0x06, 0x20, 0x00, 8, 0, 0, 0}));
 }
@@ -355,9 +352,9 @@ TEST_F(SdoServerTest, AbortCrcError) {
   ask(req({0xC6, 0x06, 0x20, 0x00, 3, 0, 0, 0}));
   ask(req({0x81, 'a', 'b', 'c', 0, 0, 0, 0}));
   uint16_t crc = crc16_ccitt(encode_string("abc")) ^ 0x0100;
-  EXPECT_EQ(ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})),
-            aborted(kString, 0, 0x05040004));
+  EXPECT_EQ(
+      ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      aborted(kString, 0, 0x05040004));
   EXPECT_EQ(dict.value(kString, 0), encode_string("stepnode"));
 }
 
@@ -395,9 +392,9 @@ TEST_F(SdoServerTest, AbortDataThatDisagreesWithTheIndicatedSize) {
   ask(req({0xC6, 0x06, 0x20, 0x00, 10, 0, 0, 0}));
   ask(req({0x81, 'a', 'b', 'c', 0, 0, 0, 0}));
   uint16_t crc = crc16_ccitt(encode_string("abc"));
-  EXPECT_EQ(ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0,
-                     0})),
-            aborted(kString, 0, 0x06070010));
+  EXPECT_EQ(
+      ask(req({0xD1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
+      aborted(kString, 0, 0x06070010));
   ask(req({0xC6, 0x06, 0x20, 0x00, 8, 0, 0, 0}));  // 8 bytes fit two segments, not three
   EXPECT_TRUE(send(req({0x01, 'a', 'b', 'c', 'd', 'e', 'f', 'g'})).empty());
   EXPECT_TRUE(send(req({0x02, 'a', 'b', 'c', 'd', 'e', 'f', 'g'})).empty());

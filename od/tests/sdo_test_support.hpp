@@ -43,11 +43,12 @@ inline void build_dictionary(Dictionary& d) {
   Entry& u8 = d.var(kU8, "U8", DataType::Unsigned8, Access::ReadWrite, encode<uint8_t>(5));
   u8.low = encode<uint8_t>(1);
   u8.high = encode<uint8_t>(100);
-  Entry& u16 = d.var(kU16, "U16", DataType::Unsigned16, Access::ReadWrite, encode<uint16_t>(0x1234));
+  Entry& u16 =
+      d.var(kU16, "U16", DataType::Unsigned16, Access::ReadWrite, encode<uint16_t>(0x1234));
   u16.low = encode<uint16_t>(0x0100);
   u16.high = encode<uint16_t>(0xF000);
-  Entry& u32 = d.var(kU32, "U32", DataType::Unsigned32, Access::ReadWrite,
-                     encode<uint32_t>(0x12345678));
+  Entry& u32 =
+      d.var(kU32, "U32", DataType::Unsigned32, Access::ReadWrite, encode<uint32_t>(0x12345678));
   u32.low = encode<uint32_t>(0x10);
   u32.high = encode<uint32_t>(0xF0000000);
   Entry& i32 = d.var(kI32, "I32", DataType::Integer32, Access::ReadWrite, encode<int32_t>(-5));
@@ -55,8 +56,8 @@ inline void build_dictionary(Dictionary& d) {
   i32.high = encode<int32_t>(1000);
   d.var(kRo, "RO", DataType::Unsigned32, Access::ReadOnly, encode<uint32_t>(0xCAFEBABE));
   d.var(kWo, "WO", DataType::Unsigned32, Access::WriteOnly, encode<uint32_t>(0));
-  d.var(kString, "String", DataType::VisibleString, Access::ReadWrite,
-        encode_string("stepnode")).max_length = 30;
+  d.var(kString, "String", DataType::VisibleString, Access::ReadWrite, encode_string("stepnode"))
+      .max_length = 30;
   d.var(kDomain, "Domain", DataType::Domain, Access::ReadWrite, pattern(100)).max_length = 5000;
   Object& rec = d.record(kRecord, "Record");
   rec.add(1, "A", DataType::Unsigned8, Access::ReadWrite, {1});

@@ -131,11 +131,13 @@ TEST(SdoAbortCodes, ValuesAndTextsOfCiA301Table22) {
       {SdoAbort::ValueTooLow, 0x06090032, "Value of parameter written too low"},
       {SdoAbort::MaxBelowMin, 0x06090036, "Maximum value is less than minimum value"},
       {SdoAbort::General, 0x08000000, "General error"},
-      {SdoAbort::DataTransfer, 0x08000020, "Data cannot be transferred or stored to the application"},
+      {SdoAbort::DataTransfer, 0x08000020,
+       "Data cannot be transferred or stored to the application"},
       {SdoAbort::LocalControl, 0x08000021,
        "Data cannot be transferred or stored to the application because of local control"},
       {SdoAbort::DeviceState, 0x08000022,
-       "Data cannot be transferred or stored to the application because of the present device state"},
+       "Data cannot be transferred or stored to the application because of the present device "
+       "state"},
       {SdoAbort::NoDictionary, 0x08000023,
        "Object dictionary dynamic generation fails or no object dictionary is present"},
       {SdoAbort::NoData, 0x08000024, "No data available"},
@@ -194,9 +196,9 @@ TEST(TypedViews, SignExtensionZeroExtensionAndReal) {
   EXPECT_EQ(as_signed(DT::Unsigned32, Bytes{0xFF, 0xFF, 0xFF, 0xFF}), 0xFFFFFFFF);
   EXPECT_EQ(as_unsigned(DT::Unsigned16, Bytes{0x34, 0x12}), 0x1234u);
   EXPECT_EQ(as_unsigned(DT::Integer16, Bytes{0xFE, 0xFF}), 0xFFFEu);
-  EXPECT_EQ(as_unsigned(DT::Unsigned8, Bytes{0x12, 0x34}), 0x12u);  // only the type's size
-  EXPECT_EQ(as_unsigned(DT::Unsigned32, Bytes{0x12}), 0x12u);       // short: what is there
-  EXPECT_EQ(as_unsigned(DT::Domain, Bytes{1, 2, 3}), 0x030201u);    // variable: up to 8 bytes
+  EXPECT_EQ(as_unsigned(DT::Unsigned8, Bytes{0x12, 0x34}), 0x12u);       // only the type's size
+  EXPECT_EQ(as_unsigned(DT::Unsigned32, Bytes{0x12}), 0x12u);            // short: what is there
+  EXPECT_EQ(as_unsigned(DT::Domain, Bytes{1, 2, 3}), 0x030201u);         // variable: up to 8 bytes
   EXPECT_EQ(as_unsigned(DT::Real32, encode<float>(1.0f)), 0x3F800000u);  // raw bit pattern
   EXPECT_EQ(as_real(DT::Real32, encode<float>(-2.5f)), -2.5);
   EXPECT_EQ(as_real(DT::Real64, encode<double>(1e300)), 1e300);
@@ -209,7 +211,8 @@ TEST(TypedViews, CompareByTheNumericMeaningOfTheType) {
   EXPECT_LT(compare_values(DT::Integer8, ff, one), 0);   // -1 < 1
   EXPECT_GT(compare_values(DT::Unsigned8, ff, one), 0);  // 255 > 1
   EXPECT_EQ(compare_values(DT::Unsigned8, one, one), 0);
-  EXPECT_LT(compare_values(DT::Integer32, encode<int32_t>(INT32_MIN), encode<int32_t>(INT32_MAX)), 0);
+  EXPECT_LT(compare_values(DT::Integer32, encode<int32_t>(INT32_MIN), encode<int32_t>(INT32_MAX)),
+            0);
   EXPECT_GT(compare_values(DT::Unsigned32, encode<uint32_t>(0x80000000), encode<uint32_t>(1)), 0);
   EXPECT_LT(compare_values(DT::Integer64, encode<int64_t>(-1), encode<int64_t>(0)), 0);
   EXPECT_GT(compare_values(DT::Unsigned64, encode<uint64_t>(UINT64_MAX), encode<uint64_t>(0)), 0);
@@ -339,7 +342,8 @@ TEST(ParseValue, Reals) {
   EXPECT_EQ(parse_value(DT::Real32, "0.1"), encode<float>(0.1f));
   EXPECT_EQ(parse_value(DT::Real64, "0.1"), encode<double>(0.1));
   EXPECT_EQ(parse_value(DT::Real64, "1e300"), encode<double>(1e300));
-  EXPECT_EQ(parse_value(DT::Real32, "3.4028234e38"), encode<float>(std::numeric_limits<float>::max()));
+  EXPECT_EQ(parse_value(DT::Real32, "3.4028234e38"),
+            encode<float>(std::numeric_limits<float>::max()));
   EXPECT_TRUE(std::isinf(decode<float>(parse_value(DT::Real32, "-inf"))));
   // A finite number beyond REAL32 has no REAL32 value.
   EXPECT_THROW(parse_value(DT::Real32, "1e39"), std::invalid_argument);

@@ -38,14 +38,15 @@ motion::StpcalcInput parse_input(const std::string& total, const std::vector<std
   if (total != "-") {
     int64_t t = 0;
     if (!to_integer(total, t))
-      throw std::invalid_argument("total pulses '" + total + "' is not an integer (0..16777215, or - for none)");
+      throw std::invalid_argument("total pulses '" + total +
+                                  "' is not an integer (0..16777215, or - for none)");
     in.total = t;
   }
   int64_t v[5];
   for (size_t i = 0; i < 5; ++i)
     if (!to_integer(aq[i], v[i]))
-      throw std::invalid_argument(std::string(kWords[i].name) + " '" + aq[i] + "' is not an integer (" +
-                                  kWords[i].range + ")");
+      throw std::invalid_argument(std::string(kWords[i].name) + " '" + aq[i] +
+                                  "' is not an integer (" + kWords[i].range + ")");
   in.aq3 = v[0], in.aq4 = v[1], in.aq5 = v[2], in.aq6 = v[3], in.aq7 = v[4];
   return in;
 }

@@ -88,13 +88,16 @@ EngineProfile run_engine(const motion::StpcalcInput& in, bool stpcalc_peak) {
   e.peak_velocity = ramp.velocity_of(m.peak_level);
   e.acceleration_pulses = static_cast<double>(m.accel_steps);
   e.deceleration_pulses = static_cast<double>(m.decel_steps + m.creep_steps);
-  const Tick accel_end = m.run_start >= 0 ? m.run_start : m.decel_start >= 0 ? m.decel_start : m.end;
+  const Tick accel_end = m.run_start >= 0     ? m.run_start
+                         : m.decel_start >= 0 ? m.decel_start
+                                              : m.end;
   e.acceleration_time_ms = ticks_to_ms(accel_end - m.start);
   e.deceleration_time_ms = m.decel_start >= 0 ? ticks_to_ms(m.end - m.decel_start) : 0.0;
   if (in.total) {
     e.running_pulses = static_cast<double>(m.run_steps);
-    e.running_time_ms = m.run_start >= 0 ? ticks_to_ms((m.decel_start >= 0 ? m.decel_start : m.end) - m.run_start)
-                                         : 0.0;
+    e.running_time_ms =
+        m.run_start >= 0 ? ticks_to_ms((m.decel_start >= 0 ? m.decel_start : m.end) - m.run_start)
+                         : 0.0;
     e.total_time_ms = ticks_to_ms(m.end - m.start);
   } else {
     e.total_time_ms = e.acceleration_time_ms + e.deceleration_time_ms;  // B1.3.14

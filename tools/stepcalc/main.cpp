@@ -19,7 +19,8 @@ using namespace stepnode;
 namespace {
 
 bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() > suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() > suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 int run(int argc, char** argv) {
@@ -30,24 +31,35 @@ int run(int argc, char** argv) {
   std::vector<std::string> aq;
   bool json = false, stpcalc_peak = false;
   std::string plot;
-  app.add_option("TOTAL", total, "total pulses 0..16777215, or - for a move without destination (jog)")->required();
-  app.add_option("AQ3_AQ7", aq,
-                 "velocity resolution AQ3 (20..65535), base velocity AQ4 (1..8190), running velocity AQ5\n"
-                 "(AQ4+1..8191), acceleration ms AQ6 and deceleration ms AQ7 (1..(AQ5-AQ4)/0.3, at most 27300;\n"
-                 "AQ7 0 = AQ6)")
+  app.add_option("TOTAL", total,
+                 "total pulses 0..16777215, or - for a move without destination (jog)")
+      ->required();
+  app.add_option(
+         "AQ3_AQ7", aq,
+         "velocity resolution AQ3 (20..65535), base velocity AQ4 (1..8190), running velocity AQ5\n"
+         "(AQ4+1..8191), acceleration ms AQ6 and deceleration ms AQ7 (1..(AQ5-AQ4)/0.3, at most "
+         "27300;\n"
+         "AQ7 0 = AQ6)")
       ->required()
       ->expected(5);
-  app.add_flag("--json", json, "print one JSON object: STPCALC's values and an \"engine\" object with the same keys");
-  app.add_flag("--stpcalc-peak", stpcalc_peak,
-               "the engine as an axis with 0x2n09:13 set: a short move cruises at STPCALC's peak velocity\n"
-               "instead of turning where its ramps meet (halfway with equal ramps, SPM30 3.4.5)");
+  app.add_flag(
+      "--json", json,
+      "print one JSON object: STPCALC's values and an \"engine\" object with the same keys");
+  app.add_flag(
+      "--stpcalc-peak", stpcalc_peak,
+      "the engine as an axis with 0x2n09:13 set: a short move cruises at STPCALC's peak velocity\n"
+      "instead of turning where its ramps meet (halfway with equal ramps, SPM30 3.4.5)");
   app.add_option("--plot", plot,
-                 "draw velocity against time, STPCALC's and the engine's: FILE.svg, or FILE.png (rsvg-convert)");
+                 "draw velocity against time, STPCALC's and the engine's: FILE.svg, or FILE.png "
+                 "(rsvg-convert)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    std::fprintf(stderr, "stepcalc: %s (usage: stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] [--stpcalc-peak] [--plot FILE])\n", e.what());
+    std::fprintf(stderr,
+                 "stepcalc: %s (usage: stepcalc TOTAL AQ3 AQ4 AQ5 AQ6 AQ7 [--json] "
+                 "[--stpcalc-peak] [--plot FILE])\n",
+                 e.what());
     return 2;
   }
   if (!plot.empty() && !ends_with(plot, ".svg") && !ends_with(plot, ".png")) {

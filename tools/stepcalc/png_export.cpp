@@ -36,7 +36,8 @@ void write_png(const std::string& svg, const std::string& png_path) {
     throw std::runtime_error(std::string("cannot run rsvg-convert: ") + std::strerror(rc));
   }
   // rsvg-convert reads the whole SVG before it writes; a closed pipe means it failed.
-  struct sigaction ignore {}, old {};
+  struct sigaction ignore {
+  }, old{};
   ignore.sa_handler = SIG_IGN;
   sigaction(SIGPIPE, &ignore, &old);
   size_t done = 0;

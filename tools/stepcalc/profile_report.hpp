@@ -10,7 +10,7 @@ namespace stepnode::tools {
 
 struct ProfileReport {
   motion::StpcalcInput input;
-  bool triangular = false;  // STPCALC: the running velocity is never reached (B1.3.8)
+  bool triangular = false;    // STPCALC: the running velocity is never reached (B1.3.8)
   bool stpcalc_peak = false;  // the engine with the axis option 0x2n09:13
   ProfileValues stpcalc, engine;
   Curve ideal_curve;   // STPCALC's trapezoid or triangle: straight ramps at Rate_A / Rate_D

@@ -21,10 +21,8 @@ double nice_step(double range, int ticks) {
 
 std::string number(double v) {
   char buf[32];
-  if (std::fabs(v) >= 1 || v == 0)
-    std::snprintf(buf, sizeof buf, "%.0f", v);
-  else
-    std::snprintf(buf, sizeof buf, "%g", v);
+  if (std::fabs(v) >= 1 || v == 0) std::snprintf(buf, sizeof buf, "%.0f", v);
+  else std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
 }
 
@@ -41,7 +39,8 @@ std::vector<std::pair<double, double>> screen_points(const Curve& c, const Frame
   for (size_t i = 0; i < c.size(); ++i) {
     double px = f.x(c[i].first), py = f.y(c[i].second);
     bool last = i + 1 == c.size();
-    bool near = !pts.empty() && std::fabs(px - pts.back().first) < 0.5 && std::fabs(py - pts.back().second) < 0.5;
+    bool near = !pts.empty() && std::fabs(px - pts.back().first) < 0.5 &&
+                std::fabs(py - pts.back().second) < 0.5;
     if (near && !last) continue;
     pts.emplace_back(px, py);
   }
@@ -49,7 +48,8 @@ std::vector<std::pair<double, double>> screen_points(const Curve& c, const Frame
     std::vector<std::pair<double, double>> thin;
     double stride = static_cast<double>(pts.size() - 1) / static_cast<double>(kMaxPlotPoints - 1);
     for (size_t k = 0; k < kMaxPlotPoints; ++k)
-      thin.push_back(pts[std::min(pts.size() - 1, static_cast<size_t>(std::llround(static_cast<double>(k) * stride)))]);
+      thin.push_back(pts[std::min(
+          pts.size() - 1, static_cast<size_t>(std::llround(static_cast<double>(k) * stride)))]);
     pts.swap(thin);
   }
   return pts;
@@ -88,20 +88,27 @@ Frame frame_of(const ProfileReport& r) {
 
 // The XML header, the title (the inputs), the background and the heading.
 void put_heading(Svg& svg, const ProfileReport& r) {
-  svg.put("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-          "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f %.0f\" "
-          "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
-          kWidth, kHeight, kWidth, kHeight);
-  std::string total = r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
-  svg.put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(), static_cast<long long>(r.input.aq3),
-          static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5),
-          static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7));
-  svg.put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth, kHeight);
-  svg.put("<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
-          "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
-          kLeft, total.c_str(), static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
+  svg.put(
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f "
+      "%.0f\" "
+      "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
+      kWidth, kHeight, kWidth, kHeight);
+  std::string total =
+      r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
+  svg.put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(),
+          static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
           static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6),
-          static_cast<long long>(r.input.aq7), r.triangular ? " (triangular)" : "");
+          static_cast<long long>(r.input.aq7));
+  svg.put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth,
+          kHeight);
+  svg.put(
+      "<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
+      "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
+      kLeft, total.c_str(), static_cast<long long>(r.input.aq3),
+      static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5),
+      static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7),
+      r.triangular ? " (triangular)" : "");
 }
 
 // Grid, axes, tick marks, tick labels and the axis titles.
@@ -123,18 +130,22 @@ void put_axes(Svg& svg, const Frame& f) {
   each_tick(vstep, f.vmax, [&](double v) { svg.text(kX0 - 8, f.y(v) + 4, "end", number(v)); });
   svg.s += "</g>\n";
   svg.text((kX0 + kX1) / 2, kHeight - 14, "middle", "time (ms)");
-  svg.put("<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity (pulses/s)</text>\n",
-          (kY0 + kY1) / 2);
+  svg.put(
+      "<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity "
+      "(pulses/s)</text>\n",
+      (kY0 + kY1) / 2);
 }
 
 // The two series, clipped to the plot area.
 void put_curves(Svg& svg, const ProfileReport& r, const Frame& f) {
-  svg.put("<defs><clipPath id=\"plot-area\">"
-          "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
-          kX0, kY1 - 2, kX1 - kX0, kY0 - kY1 + 4);
+  svg.put(
+      "<defs><clipPath id=\"plot-area\">"
+      "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
+      kX0, kY1 - 2, kX1 - kX0, kY0 - kY1 + 4);
   auto polyline = [&](const Curve& c, const char* id, const char* colour, const char* extra) {
-    svg.s += std::string("<polyline id=\"") + id + "\" clip-path=\"url(#plot-area)\" fill=\"none\" stroke=\"" +
-             colour + "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"" + extra + " points=\"";
+    svg.s += std::string("<polyline id=\"") + id +
+             "\" clip-path=\"url(#plot-area)\" fill=\"none\" stroke=\"" + colour +
+             "\" stroke-width=\"1.8\" stroke-linejoin=\"round\"" + extra + " points=\"";
     bool first = true;
     for (auto [px, py] : screen_points(c, f)) {
       svg.put(first ? "%.2f,%.2f" : " %.2f,%.2f", px, py);
@@ -149,15 +160,19 @@ void put_curves(Svg& svg, const ProfileReport& r, const Frame& f) {
 // Legend, above the plot area so it never covers a curve.
 void put_legend(Svg& svg) {
   double lx = kLeft, ly = 50;
-  svg.put("<g id=\"legend\">"
-          "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" "
-          "stroke-dasharray=\"7 4\"/>"
-          "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
-          lx, ly, lx + 30, ly, lx + 36, ly + 4);
+  svg.put(
+      "<g id=\"legend\">"
+      "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" "
+      "stroke-dasharray=\"7 4\"/>"
+      "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4);
   lx += 400;
-  svg.put("<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" stroke-width=\"2\"/>"
-          "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D ticks</text></g>\n",
-          lx, ly, lx + 30, ly, lx + 36, ly + 4);
+  svg.put(
+      "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" "
+      "stroke-width=\"2\"/>"
+      "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D "
+      "ticks</text></g>\n",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4);
 }
 
 }  // namespace

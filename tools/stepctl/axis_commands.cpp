@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <optional>
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -48,7 +48,8 @@ struct AxisAccess {
 const char* kPhase[] = {"stopped", "accelerating", "running", "decelerating", "base velocity"};
 
 // Live line while the axis moves: a bar toward the target (moves), position, velocity, phase.
-void progress(AxisAccess& a, bool quiet, std::optional<std::pair<int64_t, int64_t>> from_to = std::nullopt) {
+void progress(AxisAccess& a, bool quiet,
+              std::optional<std::pair<int64_t, int64_t>> from_to = std::nullopt) {
   for (;;) {
     uint16_t s = a.status();
     int32_t pos = od::decode<int32_t>(a.read(kMotorPosition));
@@ -57,7 +58,8 @@ void progress(AxisAccess& a, bool quiet, std::optional<std::pair<int64_t, int64_
     if (!quiet) {
       std::string bar;
       if (from_to && from_to->first != from_to->second) {
-        double done = static_cast<double>(pos - from_to->first) / static_cast<double>(from_to->second - from_to->first);
+        double done = static_cast<double>(pos - from_to->first) /
+                      static_cast<double>(from_to->second - from_to->first);
         int filled = static_cast<int>(std::lround(std::clamp(done, 0.0, 1.0) * 30));
         bar = "[" + std::string(filled, '#') + std::string(30 - filled, '-') + "] " +
               std::to_string(static_cast<int>(std::clamp(done, 0.0, 1.0) * 100)) + "%";
@@ -76,18 +78,19 @@ int report(AxisAccess& a) {
   uint16_t s = a.status();
   int32_t pos = od::decode<int32_t>(a.read(kMotorPosition));
   int32_t enc = od::decode<int32_t>(a.read(kEncoderPosition));
-  std::printf("node %u axis %u: position %d, encoder %d, status 0x%04X: %s\n", a.node, a.axis + 1, pos, enc, s,
-              status_words(s).c_str());
+  std::printf("node %u axis %u: position %d, encoder %d, status 0x%04X: %s\n", a.node, a.axis + 1,
+              pos, enc, s, status_words(s).c_str());
   return (s & 0x00FF) ? 1 : 0;  // an error bit is on
 }
 
 }  // namespace
 
 std::string status_words(uint16_t s) {
-  static const char* names[16] = {"EMERGENCY STOP", "LOWER LIMIT", "UPPER LIMIT", "ILLEGAL MOVE",
-                                  "MOTOR STALLED", "error 6", "error 7", "POWER-UP/WATCHDOG",
-                                  "position valid", "resumable", "axis 2 selected", "axis 3 selected",
-                                  "at home", "accelerating", "decelerating", "moving"};
+  static const char* names[16] = {
+      "EMERGENCY STOP", "LOWER LIMIT",  "UPPER LIMIT",     "ILLEGAL MOVE",
+      "MOTOR STALLED",  "error 6",      "error 7",         "POWER-UP/WATCHDOG",
+      "position valid", "resumable",    "axis 2 selected", "axis 3 selected",
+      "at home",        "accelerating", "decelerating",    "moving"};
   std::string out;
   for (int i = 0; i < 16; ++i) {
     if (!(s & (1u << i))) continue;
@@ -154,14 +157,16 @@ int run_axis_command(MasterBus& bus, int node, int axis, const std::vector<std::
       throw std::invalid_argument("move: '" + w[2] + "' is not a whole number of steps");
     }
     if (target < -8'388'608 || target > 8'388'607)
-      throw std::invalid_argument("move: " + w[2] + " is outside -8388608..8388607 (the module's range)");
+      throw std::invalid_argument("move: " + w[2] +
+                                  " is outside -8388608..8388607 (the module's range)");
     int64_t start = od::decode<int32_t>(a.read(kMotorPosition));
     a.write(kDestination, od::encode<int32_t>(static_cast<int32_t>(target)));
     a.pulse(w[1] == "abs" ? 1u << 8 : 1u << 7);  // %Q9 / %Q8
     progress(a, quiet, std::make_pair(start, w[1] == "abs" ? target : start + target));
     return report(a);
   }
-  throw std::invalid_argument("unknown axis command '" + verb + "' (clear, home, move, jog, stop, estop, status)");
+  throw std::invalid_argument("unknown axis command '" + verb +
+                              "' (clear, home, move, jog, stop, estop, status)");
 }
 
 }  // namespace stepnode::tools

@@ -44,14 +44,21 @@ std::string join(const std::vector<std::string>& words) {
 class Axis {
  public:
   Axis(MasterBus& bus, const ObjectCatalog& catalog, const DriveArgs& args)
-      : bus_(bus), catalog_(catalog), node_(static_cast<uint8_t>(args.node)), axis_(static_cast<unsigned>(args.axis)),
+      : bus_(bus),
+        catalog_(catalog),
+        node_(static_cast<uint8_t>(args.node)),
+        axis_(static_cast<unsigned>(args.axis)),
         quiet_(args.quiet) {}
 
-  std::string who() const { return "node " + std::to_string(node_) + " axis " + std::to_string(axis_); }
+  std::string who() const {
+    return "node " + std::to_string(node_) + " axis " + std::to_string(axis_);
+  }
   bool quiet() const { return quiet_; }
   uint16_t at(uint16_t base) const { return index(axis_ - 1, base); }
 
-  od::SdoResult try_read(uint16_t base, uint8_t sub = 0) { return bus_.upload(node_, at(base), sub); }
+  od::SdoResult try_read(uint16_t base, uint8_t sub = 0) {
+    return bus_.upload(node_, at(base), sub);
+  }
   od::Bytes read(uint16_t base, uint8_t sub = 0) {
     od::SdoResult r = bus_.upload(node_, at(base), sub);
     if (!r.ok()) fail(base, sub, r);
@@ -70,10 +77,11 @@ class Axis {
     std::snprintf(addr, sizeof addr, "0x%04X:%02X", i, sub);
     std::string what = who() + ": " + addr;
     if (auto info = catalog_.find(i, sub)) what += " " + info->name;
-    what += std::string(": ") + (r.aborted_by_server ? "abort " : "failed ") + hex8(static_cast<uint32_t>(r.abort)) +
-            " " + std::string(od::abort_text(r.abort));
+    what += std::string(": ") + (r.aborted_by_server ? "abort " : "failed ") +
+            hex8(static_cast<uint32_t>(r.abort)) + " " + std::string(od::abort_text(r.abort));
     if (r.abort == od::SdoAbort::NoObject)
-      what += " (no CiA 402 axis " + std::to_string(axis_) + " on this node? profiles = [\"cia402\"] in its config)";
+      what += " (no CiA 402 axis " + std::to_string(axis_) +
+              " on this node? profiles = [\"cia402\"] in its config)";
     throw std::runtime_error(what);
   }
 
@@ -92,7 +100,9 @@ class Axis {
   void write_u32(uint16_t base, uint8_t sub, int64_t v) {
     write(base, sub, od::encode<uint32_t>(static_cast<uint32_t>(v)));
   }
-  void write_i32(uint16_t base, int64_t v) { write(base, 0, od::encode<int32_t>(static_cast<int32_t>(v))); }
+  void write_i32(uint16_t base, int64_t v) {
+    write(base, 0, od::encode<int32_t>(static_cast<int32_t>(v)));
+  }
 
   // "Fault, 603Fh 0x8612 reference limit" (the error code only in the fault states).
   std::string state_text(uint16_t sw) {
@@ -118,7 +128,8 @@ class Axis {
 void sleep_ms(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
 Clock::time_point after(double seconds) {
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 std::string seconds_text(double s) {
@@ -140,30 +151,38 @@ uint16_t run_steps(Axis& a, const Planner& plan, int wait_s) {
   for (int taken = 0;; ++taken) {
     const State state = drive::decode_state(sw);
     if (state == State::Unknown)
-      throw std::runtime_error(a.who() + ": statusword 6041h " + hex4(sw) + " shows no CiA 402 state");
+      throw std::runtime_error(a.who() + ": statusword 6041h " + hex4(sw) +
+                               " shows no CiA 402 state");
     const std::optional<drive::Step> step = plan(state, a.last_controlword());
     if (!step) return sw;
-    if (taken == 8) throw std::runtime_error(a.who() + ": still in " + a.state_text(sw) + " after 8 steps");
+    if (taken == 8)
+      throw std::runtime_error(a.who() + ": still in " + a.state_text(sw) + " after 8 steps");
     std::string words;
     for (uint16_t cw : step->controlwords) words += (words.empty() ? "" : ", ") + hex4(cw);
     std::string doing = step->controlwords.empty() ? "waiting " + step->command
                                                    : step->command + " (6040h = " + words + ")";
     std::string targets;
-    for (State s : step->leads_to) targets += std::string(targets.empty() ? "" : " or ") + drive::name(s);
-    if (!a.quiet()) std::printf("  %s: %s -> %s\n", drive::name(state), doing.c_str(), targets.c_str());
+    for (State s : step->leads_to)
+      targets += std::string(targets.empty() ? "" : " or ") + drive::name(s);
+    if (!a.quiet())
+      std::printf("  %s: %s -> %s\n", drive::name(state), doing.c_str(), targets.c_str());
     for (uint16_t cw : step->controlwords) a.controlword(cw);
     const double limit = step->ramp ? static_cast<double>(wait_s) : kStepSeconds;
     const auto deadline = after(limit);
     for (;;) {
       sw = a.statusword();
       const State now = drive::decode_state(sw);
-      if (std::find(step->leads_to.begin(), step->leads_to.end(), now) != step->leads_to.end()) break;
+      if (std::find(step->leads_to.begin(), step->leads_to.end(), now) != step->leads_to.end())
+        break;
       if (drive::fault(now) && !drive::fault(state))  // a fault on the way: no use waiting
         throw std::runtime_error(a.who() + ": went to " + a.state_text(sw) + " on " + doing);
       if (Clock::now() > deadline) {
         std::string what = a.who();
         what.append(": stuck in ").append(a.state_text(sw)).append(": ").append(doing);
-        what.append(" did not lead to ").append(targets).append(" within ").append(seconds_text(limit));
+        what.append(" did not lead to ")
+            .append(targets)
+            .append(" within ")
+            .append(seconds_text(limit));
         throw std::runtime_error(what);
       }
       sleep_ms(10);
@@ -177,11 +196,14 @@ int cmd_status(Axis& a) {
   const uint16_t code = a.error_code();
   const int32_t pos = a.position(), vel = a.velocity();
   const State state = drive::decode_state(sw);
-  std::printf("%s: %s, mode %s (6061h = %d)\n", a.who().c_str(), drive::name(state), drive::mode_name(mode).c_str(),
-              mode);
-  std::printf("  statusword 6041h %s: %s\n", hex4(sw).c_str(), join(drive::status_bits(sw, mode)).c_str());
-  if (mode == cia402::mode::kHoming) std::printf("  homing: %s\n", drive::homing_status(sw).c_str());
-  std::printf("  error code 603Fh %s: %s\n", hex4(code).c_str(), drive::error_code_text(code).c_str());
+  std::printf("%s: %s, mode %s (6061h = %d)\n", a.who().c_str(), drive::name(state),
+              drive::mode_name(mode).c_str(), mode);
+  std::printf("  statusword 6041h %s: %s\n", hex4(sw).c_str(),
+              join(drive::status_bits(sw, mode)).c_str());
+  if (mode == cia402::mode::kHoming)
+    std::printf("  homing: %s\n", drive::homing_status(sw).c_str());
+  std::printf("  error code 603Fh %s: %s\n", hex4(code).c_str(),
+              drive::error_code_text(code).c_str());
   std::printf("  position actual 6064h %d, velocity actual 606Ch %d\n", pos, vel);
   return drive::fault(state) || state == State::Unknown ? 1 : 0;
 }
@@ -197,8 +219,9 @@ int cmd_device_control(Axis& a, const DriveArgs& args) {
   const State state = drive::decode_state(sw);
   std::string note;
   if (v == "quick-stop" && state == before) {
-    note = drive::fault(state) ? " (the fault reaction has stopped the drive)"
-                               : state == State::QuickStopActive ? " (already)" : " (nothing to stop)";
+    note = drive::fault(state)               ? " (the fault reaction has stopped the drive)"
+           : state == State::QuickStopActive ? " (already)"
+                                             : " (nothing to stop)";
   } else if (v == "fault-reset" && state == before) {
     note = " (no fault to reset)";
   } else if (v == "disable" && state == before && state != State::ReadyToSwitchOn) {
@@ -219,8 +242,9 @@ int cmd_device_control(Axis& a, const DriveArgs& args) {
 void require_enabled(Axis& a, const DriveArgs& args) {
   const uint16_t sw = a.statusword();
   if (drive::decode_state(sw) == State::OperationEnabled) return;
-  throw std::runtime_error(a.who() + " is in " + a.state_text(sw) + ", not Operation enabled: run `stepctl drive " +
-                           "enable --node " + std::to_string(args.node) + " --axis " + std::to_string(args.axis) +
+  throw std::runtime_error(a.who() + " is in " + a.state_text(sw) +
+                           ", not Operation enabled: run `stepctl drive " + "enable --node " +
+                           std::to_string(args.node) + " --axis " + std::to_string(args.axis) +
                            "` first");
 }
 
@@ -240,8 +264,9 @@ bool set_mode(Axis& a, int8_t mode) {
   while (shown != mode) {
     if (Clock::now() > deadline) {
       a.try_write(kModesOfOperation, 0, od::encode<int8_t>(shown));
-      throw std::runtime_error(a.who() + ": 6061h still shows " + drive::mode_name(shown) + " after 6060h = " +
-                               std::to_string(mode) + " (" + drive::mode_name(mode) +
+      throw std::runtime_error(a.who() + ": 6061h still shows " + drive::mode_name(shown) +
+                               " after 6060h = " + std::to_string(mode) + " (" +
+                               drive::mode_name(mode) +
                                "): the drive changes its mode when its motion has ended");
     }
     sleep_ms(10);
@@ -264,8 +289,9 @@ bool wait_bit12(Axis& a, bool on, uint16_t& sw) {
 
 // Live position and velocity until `done(statusword)`; the drive leaving Operation enabled
 // or --wait running out is a failure. `bar`: from, to positions for a progress bar.
-uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode, const std::function<bool(uint16_t)>& done,
-                const char* what, std::optional<std::pair<int64_t, int64_t>> bar = std::nullopt) {
+uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode,
+                const std::function<bool(uint16_t)>& done, const char* what,
+                std::optional<std::pair<int64_t, int64_t>> bar = std::nullopt) {
   const auto deadline = after(args.wait_s);
   for (;;) {
     const uint16_t sw = a.statusword();
@@ -275,7 +301,8 @@ uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode, const std::function
       std::string b;
       if (bar && bar->first != bar->second) {
         const double part = std::clamp(
-            static_cast<double>(pos - bar->first) / static_cast<double>(bar->second - bar->first), 0.0, 1.0);
+            static_cast<double>(pos - bar->first) / static_cast<double>(bar->second - bar->first),
+            0.0, 1.0);
         const int filled = static_cast<int>(std::lround(part * 30));
         b = "[" + std::string(filled, '#') + std::string(30 - filled, '-') + "] " +
             std::to_string(static_cast<int>(part * 100)) + "% ";
@@ -286,13 +313,13 @@ uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode, const std::function
     const State state = drive::decode_state(sw);
     if (state != State::OperationEnabled) {
       if (!a.quiet()) std::printf("\n");
-      throw std::runtime_error(a.who() + ": left Operation enabled " + what + ": " + a.state_text(sw) +
-                               ", position " + std::to_string(pos));
+      throw std::runtime_error(a.who() + ": left Operation enabled " + what + ": " +
+                               a.state_text(sw) + ", position " + std::to_string(pos));
     }
     if (shown != mode) {  // another master changed the mode: the bits mean other things now
       if (!a.quiet()) std::printf("\n");
-      throw std::runtime_error(a.who() + ": 6061h changed to " + drive::mode_name(shown) + " " + what +
-                               ", position " + std::to_string(pos));
+      throw std::runtime_error(a.who() + ": 6061h changed to " + drive::mode_name(shown) + " " +
+                               what + ", position " + std::to_string(pos));
     }
     if (done(sw)) {
       if (!a.quiet()) std::printf("\n");
@@ -300,8 +327,9 @@ uint16_t follow(Axis& a, const DriveArgs& args, int8_t mode, const std::function
     }
     if (Clock::now() > deadline) {
       if (!a.quiet()) std::printf("\n");
-      throw std::runtime_error(a.who() + ": not done " + what + " after " + std::to_string(args.wait_s) +
-                               " s (position " + std::to_string(pos) + ", velocity " + std::to_string(vel) +
+      throw std::runtime_error(a.who() + ": not done " + what + " after " +
+                               std::to_string(args.wait_s) + " s (position " + std::to_string(pos) +
+                               ", velocity " + std::to_string(vel) +
                                "); `stepctl drive quick-stop` stops it");
     }
     sleep_ms(50);
@@ -330,23 +358,26 @@ int cmd_pp(Axis& a, const DriveArgs& args) {
   a.controlword(cw);
   uint16_t sw = 0;
   if (!wait_bit12(a, true, sw))
-    throw std::runtime_error(a.who() + ": the set-point was not acknowledged (6041h bit 12 stayed 0 for " +
-                             seconds_text(kStepSeconds) + "; " + a.state_text(sw) + ", 6041h " + hex4(sw) + ")");
+    throw std::runtime_error(
+        a.who() + ": the set-point was not acknowledged (6041h bit 12 stayed 0 for " +
+        seconds_text(kStepSeconds) + "; " + a.state_text(sw) + ", 6041h " + hex4(sw) + ")");
   a.controlword(static_cast<uint16_t>(cw & ~drive::cw::kNewSetPoint));
   const bool buffered = !wait_bit12(a, false, sw);
   if (buffered && drive::decode_state(sw) == State::OperationEnabled && !a.quiet())
     std::printf("  set-point buffered: the drive carries it out after the move it is on\n");
   if (args.no_wait) {
-    std::printf("%s: set-point %lld%s acknowledged\n", a.who().c_str(), static_cast<long long>(args.target),
-                args.relative ? " (relative)" : "");
+    std::printf("%s: set-point %lld%s acknowledged\n", a.who().c_str(),
+                static_cast<long long>(args.target), args.relative ? " (relative)" : "");
     return 0;
   }
   const int64_t to = args.relative ? start + args.target : args.target;
   sw = follow(
-      a, args, cia402::mode::kProfilePosition, [](uint16_t s) { return (s & drive::sw::kTargetReached) != 0; },
-      "on the way to the target", std::make_pair(start, to));
-  const std::string limit =
-      (sw & drive::sw::kInternalLimitActive) ? " (internal limit active: the target was outside 607Dh)" : "";
+      a, args, cia402::mode::kProfilePosition,
+      [](uint16_t s) { return (s & drive::sw::kTargetReached) != 0; }, "on the way to the target",
+      std::make_pair(start, to));
+  const std::string limit = (sw & drive::sw::kInternalLimitActive)
+                                ? " (internal limit active: the target was outside 607Dh)"
+                                : "";
   std::printf("%s: target reached, position %d%s\n", a.who().c_str(), a.position(), limit.c_str());
   return 0;
 }
@@ -368,19 +399,25 @@ int cmd_pv(Axis& a, const DriveArgs& args) {
     throw std::runtime_error(a.who() + ": the drive refused 6060h = 3 (profile velocity)");
   if (a.controlword() & drive::cw::kHalt) a.controlword(drive::cw::kEnableOperation);
   if (args.no_wait) {
-    std::printf("%s: target velocity %lld set\n", a.who().c_str(), static_cast<long long>(args.target));
+    std::printf("%s: target velocity %lld set\n", a.who().c_str(),
+                static_cast<long long>(args.target));
     return 0;
   }
   const bool zero = args.target == 0;
-  follow(a, args, cia402::mode::kProfileVelocity, [zero](uint16_t s) {
-    return (s & drive::sw::kTargetReached) && (!zero || (s & drive::sw::kBit12));
-  }, zero ? "while stopping" : "while reaching the velocity");
-  std::printf("%s: %s, velocity %d\n", a.who().c_str(), zero ? "speed zero" : "velocity reached", a.velocity());
+  follow(
+      a, args, cia402::mode::kProfileVelocity,
+      [zero](uint16_t s) {
+        return (s & drive::sw::kTargetReached) && (!zero || (s & drive::sw::kBit12));
+      },
+      zero ? "while stopping" : "while reaching the velocity");
+  std::printf("%s: %s, velocity %d\n", a.who().c_str(), zero ? "speed zero" : "velocity reached",
+              a.velocity());
   return 0;
 }
 
 [[noreturn]] void no_homing(const Axis& a, const std::string& why) {
-  throw std::invalid_argument("homing (6060h = 6) is not supported by this node yet (" + a.who() + ": " + why + ")");
+  throw std::invalid_argument("homing (6060h = 6) is not supported by this node yet (" + a.who() +
+                              ": " + why + ")");
 }
 
 int cmd_home(Axis& a, const DriveArgs& args) {
@@ -394,13 +431,16 @@ int cmd_home(Axis& a, const DriveArgs& args) {
     a.fail(kSupportedDriveModes, 0, modes);
   }
   if (args.method) a.write(kHomingMethod, 0, od::encode<int8_t>(static_cast<int8_t>(*args.method)));
-  if (args.switch_speed) a.write_u32(kHomingSpeeds, cia402::homing_speed_sub::kSwitchSearch, *args.switch_speed);
-  if (args.zero_speed) a.write_u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch, *args.zero_speed);
+  if (args.switch_speed)
+    a.write_u32(kHomingSpeeds, cia402::homing_speed_sub::kSwitchSearch, *args.switch_speed);
+  if (args.zero_speed)
+    a.write_u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch, *args.zero_speed);
   if (args.acceleration) a.write_u32(kHomingAcceleration, 0, *args.acceleration);
   if (args.home_offset) a.write_i32(kHomeOffset, *args.home_offset);
   const int8_t method = od::decode<int8_t>(a.read(kHomingMethod));
   if (method == 0)
-    throw std::invalid_argument(a.who() + ": 6098h homing method is 0 (none assigned): give --method N");
+    throw std::invalid_argument(a.who() +
+                                ": 6098h homing method is 0 (none assigned): give --method N");
   if (!set_mode(a, cia402::mode::kHoming)) no_homing(a, "6060h = 6 refused");
   clear_bit4(a);
   a.controlword(drive::cw::kEnableOperation | drive::cw::kNewSetPoint);  // homing operation start
@@ -410,16 +450,20 @@ int cmd_home(Axis& a, const DriveArgs& args) {
   }
   // Bits 13/12/10: 0/0/1 is "interrupted or not started": the start did not take.
   const auto not_started_by = after(kStepSeconds);
-  uint16_t sw = follow(a, args, cia402::mode::kHoming, [&](uint16_t s) {
-    const bool error = s & drive::sw::kBit13, attained = s & drive::sw::kBit12, reached = s & drive::sw::kTargetReached;
-    if (!error && !attained && reached && Clock::now() > not_started_by) return true;
-    return (attained && reached) || (error && reached);
-  }, "while homing");
+  uint16_t sw = follow(
+      a, args, cia402::mode::kHoming,
+      [&](uint16_t s) {
+        const bool error = s & drive::sw::kBit13, attained = s & drive::sw::kBit12,
+                   reached = s & drive::sw::kTargetReached;
+        if (!error && !attained && reached && Clock::now() > not_started_by) return true;
+        return (attained && reached) || (error && reached);
+      },
+      "while homing");
   a.controlword(drive::cw::kEnableOperation);  // bit 4 back to 0: the procedure has ended
   const std::string status = drive::homing_status(sw);
   if (!(sw & drive::sw::kBit12))
-    throw std::runtime_error(a.who() + ": " + status + " (method " + std::to_string(method) + ", position " +
-                             std::to_string(a.position()) + ")");
+    throw std::runtime_error(a.who() + ": " + status + " (method " + std::to_string(method) +
+                             ", position " + std::to_string(a.position()) + ")");
   std::printf("%s: %s, position %d\n", a.who().c_str(), status.c_str(), a.position());
   return 0;
 }
@@ -434,7 +478,8 @@ int run_drive_command(MasterBus& bus, const ObjectCatalog& catalog, const DriveA
   if (args.verb == "pp") return cmd_pp(a, args);
   if (args.verb == "pv") return cmd_pv(a, args);
   if (args.verb == "home") return cmd_home(a, args);
-  if (args.verb == "enable" || args.verb == "disable" || args.verb == "quick-stop" || args.verb == "fault-reset")
+  if (args.verb == "enable" || args.verb == "disable" || args.verb == "quick-stop" ||
+      args.verb == "fault-reset")
     return cmd_device_control(a, args);
   throw std::invalid_argument("unknown drive command '" + args.verb + "'");
 }

@@ -7,8 +7,10 @@
 namespace stepnode::tools {
 
 CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
-  auto* drive = app.add_subcommand("drive", "CiA 402 drive (profiles = [\"cia402\"]): status, enable, disable, "
-                                            "quick-stop, fault-reset, pp, pv, home");
+  auto* drive =
+      app.add_subcommand("drive",
+                         "CiA 402 drive (profiles = [\"cia402\"]): status, enable, disable, "
+                         "quick-stop, fault-reset, pp, pv, home");
   drive->require_subcommand(1);
   const auto u32 = CLI::Range(int64_t{0}, int64_t{0xFFFF'FFFF});
   auto add = [&](const char* name, const char* help) {
@@ -30,10 +32,13 @@ CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
   add_wait(add("enable", "device control to Operation enabled (fault reset first)"));
   add_wait(add("disable", "Disable operation, then Shutdown: to Ready to switch on"));
   add("quick-stop", "Quick stop (6040h = 0x0B): to Quick stop active or Switch on disabled");
-  add_wait(add("fault-reset", "Fault reset (rising edge of 6040h bit 7): Fault to Switch on disabled"));
+  add_wait(
+      add("fault-reset", "Fault reset (rising edge of 6040h bit 7): Fault to Switch on disabled"));
 
-  auto* pp = add("pp", "profile position: 6060h = 1, 607Ah = TARGET, set-point handshake, live progress to "
-                       "target reached");
+  auto* pp =
+      add("pp",
+          "profile position: 6060h = 1, 607Ah = TARGET, set-point handshake, live progress to "
+          "target reached");
   pp->add_option("target", args.target, "target position (position units)")
       ->required()
       ->check(CLI::Range(int64_t{INT32_MIN}, int64_t{INT32_MAX}));
@@ -45,7 +50,9 @@ CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
   pp->add_flag("--no-wait", args.no_wait, "return once the set-point is acknowledged");
   add_wait(pp);
 
-  auto* pv = add("pv", "profile velocity: 6060h = 3, 60FFh = VELOCITY, until velocity reached (speed zero for 0)");
+  auto* pv = add(
+      "pv",
+      "profile velocity: 6060h = 3, 60FFh = VELOCITY, until velocity reached (speed zero for 0)");
   pv->add_option("velocity", args.target, "target velocity (velocity units), signed")
       ->required()
       ->check(CLI::Range(int64_t{INT32_MIN}, int64_t{INT32_MAX}));
@@ -55,7 +62,8 @@ CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
   add_wait(pv);
 
   auto* home = add("home", "homing: 6060h = 6, homing operation start, until homing attained");
-  home->add_option("--method", args.method, "6098h homing method (CiA 402-2: 1..35, 37)")->check(CLI::Range(-128, 127));
+  home->add_option("--method", args.method, "6098h homing method (CiA 402-2: 1..35, 37)")
+      ->check(CLI::Range(-128, 127));
   home->add_option("--switch-speed", args.switch_speed, "6099h:1 speed during search for switch")
       ->check(u32);
   home->add_option("--zero-speed", args.zero_speed, "6099h:2 speed during search for zero")

@@ -94,10 +94,14 @@ std::vector<std::string> status_bits(uint16_t s, int8_t mode) {
 std::string homing_status(uint16_t s) {
   const bool error = s & sw::kBit13, attained = s & sw::kBit12, reached = s & sw::kTargetReached;
   if (error && attained) return "reserved (bits 13 and 12 both set)";
-  if (error) return reached ? "homing error occurred, velocity is 0" : "homing error occurred, velocity is not 0";
+  if (error)
+    return reached ? "homing error occurred, velocity is 0"
+                   : "homing error occurred, velocity is not 0";
   if (attained)
-    return reached ? "homing procedure is completed successfully" : "homing is attained, but target is not reached";
-  return reached ? "homing procedure is interrupted or not started" : "homing procedure is in progress";
+    return reached ? "homing procedure is completed successfully"
+                   : "homing is attained, but target is not reached";
+  return reached ? "homing procedure is interrupted or not started"
+                 : "homing procedure is in progress";
 }
 
 std::string error_code_text(uint16_t code) {
@@ -111,7 +115,8 @@ std::string error_code_text(uint16_t code) {
 
 namespace {
 
-Step step(std::vector<uint16_t> controlwords, const char* command, std::vector<State> leads_to, bool ramp = false) {
+Step step(std::vector<uint16_t> controlwords, const char* command, std::vector<State> leads_to,
+          bool ramp = false) {
   return Step{std::move(controlwords), command, std::move(leads_to), ramp};
 }
 
@@ -129,12 +134,16 @@ Step wait_for(State state, const char* what, bool ramp) { return step({}, what, 
 
 std::optional<Step> enable_step(State state, uint16_t controlword) {
   switch (state) {
-    case State::NotReadyToSwitchOn: return wait_for(State::SwitchOnDisabled, "(the drive's initialisation)", false);
-    case State::SwitchOnDisabled: return step({cw::kShutdown}, "Shutdown", {State::ReadyToSwitchOn});
+    case State::NotReadyToSwitchOn:
+      return wait_for(State::SwitchOnDisabled, "(the drive's initialisation)", false);
+    case State::SwitchOnDisabled:
+      return step({cw::kShutdown}, "Shutdown", {State::ReadyToSwitchOn});
     case State::ReadyToSwitchOn: return step({cw::kSwitchOn}, "Switch on", {State::SwitchedOn});
-    case State::SwitchedOn: return step({cw::kEnableOperation}, "Enable operation", {State::OperationEnabled});
+    case State::SwitchedOn:
+      return step({cw::kEnableOperation}, "Enable operation", {State::OperationEnabled});
     case State::OperationEnabled: return std::nullopt;
-    case State::QuickStopActive: return step({cw::kDisableVoltage}, "Disable voltage", {State::SwitchOnDisabled});
+    case State::QuickStopActive:
+      return step({cw::kDisableVoltage}, "Disable voltage", {State::SwitchOnDisabled});
     case State::FaultReactionActive: return wait_for(State::Fault, "(the fault reaction)", true);
     case State::Fault: return reset(controlword);
     case State::Unknown: return std::nullopt;
@@ -147,7 +156,8 @@ std::optional<Step> disable_step(State state, uint16_t) {
     case State::OperationEnabled:  // transition 5: 605Ch may ramp down first
       return step({cw::kSwitchOn}, "Disable operation", {State::SwitchedOn}, true);
     case State::SwitchedOn: return step({cw::kShutdown}, "Shutdown", {State::ReadyToSwitchOn});
-    case State::QuickStopActive: return step({cw::kDisableVoltage}, "Disable voltage", {State::SwitchOnDisabled});
+    case State::QuickStopActive:
+      return step({cw::kDisableVoltage}, "Disable voltage", {State::SwitchOnDisabled});
     case State::FaultReactionActive: return wait_for(State::Fault, "(the fault reaction)", true);
     default: return std::nullopt;
   }
@@ -156,7 +166,8 @@ std::optional<Step> disable_step(State state, uint16_t) {
 std::optional<Step> quick_stop_step(State state, uint16_t) {
   switch (state) {
     case State::OperationEnabled:  // transition 11, then 12 after the ramp for 605Ah 0..4
-      return step({cw::kQuickStop}, "Quick stop", {State::QuickStopActive, State::SwitchOnDisabled});
+      return step({cw::kQuickStop}, "Quick stop",
+                  {State::QuickStopActive, State::SwitchOnDisabled});
     case State::SwitchedOn:       // transition 10
     case State::ReadyToSwitchOn:  // transition 7
       return step({cw::kQuickStop}, "Quick stop", {State::SwitchOnDisabled});
@@ -165,13 +176,15 @@ std::optional<Step> quick_stop_step(State state, uint16_t) {
 }
 
 std::optional<Step> fault_reset_step(State state, uint16_t controlword) {
-  if (state == State::FaultReactionActive) return wait_for(State::Fault, "(the fault reaction)", true);
+  if (state == State::FaultReactionActive)
+    return wait_for(State::Fault, "(the fault reaction)", true);
   if (state != State::Fault) return std::nullopt;
   return reset(controlword);
 }
 
 uint16_t set_point_controlword(bool immediately, bool relative) {
-  return static_cast<uint16_t>(cw::kEnableOperation | cw::kNewSetPoint | (immediately ? cw::kChangeSetImmediately : 0) |
+  return static_cast<uint16_t>(cw::kEnableOperation | cw::kNewSetPoint |
+                               (immediately ? cw::kChangeSetImmediately : 0) |
                                (relative ? cw::kRelative : 0));
 }
 

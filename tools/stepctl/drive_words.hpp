@@ -45,13 +45,13 @@ std::string mode_name(int8_t mode);
 // Controlword commands of the command coding table with the bits the table leaves open 0,
 // and the mode-specific bits of profile position and homing mode.
 namespace cw {
-constexpr uint16_t kDisableVoltage = 0x0000;   // 0xxx xx0x
-constexpr uint16_t kQuickStop = 0x000B;        // 0xxx x01x, with bits 0 and 3 as in operation
-constexpr uint16_t kShutdown = 0x0006;         // 0xxx x110
-constexpr uint16_t kSwitchOn = 0x0007;         // 0xxx 0111 (also Disable operation)
-constexpr uint16_t kEnableOperation = 0x000F;  // 0xxx 1111
-constexpr uint16_t kFaultReset = 0x0080;       // bit 7, its rising edge
-constexpr uint16_t kNewSetPoint = 0x0010;      // pp bit 4; hm bit 4: homing operation start
+constexpr uint16_t kDisableVoltage = 0x0000;        // 0xxx xx0x
+constexpr uint16_t kQuickStop = 0x000B;             // 0xxx x01x, with bits 0 and 3 as in operation
+constexpr uint16_t kShutdown = 0x0006;              // 0xxx x110
+constexpr uint16_t kSwitchOn = 0x0007;              // 0xxx 0111 (also Disable operation)
+constexpr uint16_t kEnableOperation = 0x000F;       // 0xxx 1111
+constexpr uint16_t kFaultReset = 0x0080;            // bit 7, its rising edge
+constexpr uint16_t kNewSetPoint = 0x0010;           // pp bit 4; hm bit 4: homing operation start
 constexpr uint16_t kChangeSetImmediately = 0x0020;  // pp bit 5
 constexpr uint16_t kRelative = 0x0040;              // pp bit 6
 constexpr uint16_t kHalt = 0x0100;                  // bit 8
@@ -64,7 +64,8 @@ constexpr uint16_t kWarning = 1u << 7;
 constexpr uint16_t kRemote = 1u << 9;
 constexpr uint16_t kTargetReached = 1u << 10;  // pv: velocity reached
 constexpr uint16_t kInternalLimitActive = 1u << 11;
-constexpr uint16_t kBit12 = 1u << 12;  // pp set-point acknowledge, pv speed zero, hm homing attained
+constexpr uint16_t kBit12 =
+    1u << 12;  // pp set-point acknowledge, pv speed zero, hm homing attained
 constexpr uint16_t kBit13 = 1u << 13;  // pp following error, pv max slippage error, hm homing error
 }  // namespace sw
 
@@ -84,8 +85,8 @@ std::string error_code_text(uint16_t code);
 // ramp (605Ch, a fault reaction), so it can take longer than a switching transition.
 struct Step {
   std::vector<uint16_t> controlwords;
-  std::string command;              // the standard's name: "Shutdown", "Fault reset", ...
-  std::vector<State> leads_to;      // any of these ends the step
+  std::string command;          // the standard's name: "Shutdown", "Fault reset", ...
+  std::vector<State> leads_to;  // any of these ends the step
   bool ramp = false;
 };
 

@@ -50,8 +50,12 @@ std::string FrameDecoder::describe(const od::CanFrame& f) const {
   if (f.rtr) return fmt("remote request 0x%03X", id);
   if (id == 0x000) {
     if (f.dlc != 2) return "NMT (malformed, DLC " + std::to_string(f.dlc) + ")";
-    const char* cmd = d[0] == 0x01 ? "start" : d[0] == 0x02 ? "stop" : d[0] == 0x80 ? "enter pre-operational"
-                    : d[0] == 0x81 ? "reset node" : d[0] == 0x82 ? "reset communication" : "unknown command";
+    const char* cmd = d[0] == 0x01   ? "start"
+                      : d[0] == 0x02 ? "stop"
+                      : d[0] == 0x80 ? "enter pre-operational"
+                      : d[0] == 0x81 ? "reset node"
+                      : d[0] == 0x82 ? "reset communication"
+                                     : "unknown command";
     return std::string("NMT ") + cmd + (d[1] ? fmt(" node %u", d[1]) : " all nodes");
   }
   if (id == 0x080) return f.dlc ? fmt("SYNC counter %u", d[0]) : "SYNC";
@@ -61,7 +65,8 @@ std::string FrameDecoder::describe(const od::CanFrame& f) const {
     uint16_t code = od::get_u16(d);
     // stepctl speaks to stepnodes: the HP channels' codes in the manual's words.
     const char* hp = hp44714a::emcy_text(code);
-    return fmt("EMCY node %u: 0x%04X ", node, code) + (hp ? std::string(hp) : od::emcy_code_text(code)) +
+    return fmt("EMCY node %u: 0x%04X ", node, code) +
+           (hp ? std::string(hp) : od::emcy_code_text(code)) +
            fmt("; error register 0x%02X (", d[2]) + od::error_register_text(d[2]) +
            "); manufacturer " + hex_bytes(d + 3, 5);
   }
@@ -87,7 +92,8 @@ std::string FrameDecoder::describe_sdo(const od::CanFrame& f, bool request) cons
   uint8_t sub = d[3];
   if (cs == 4) {
     uint32_t code = od::get_u32(d + 4);
-    return head + "abort " + object_name(index, sub) + fmt(": 0x%08X ", code) + std::string(od::abort_text(code));
+    return head + "abort " + object_name(index, sub) + fmt(": 0x%08X ", code) +
+           std::string(od::abort_text(code));
   }
   bool expedited = d[0] & 0x02, sized = d[0] & 0x01;
   if (request) {
@@ -99,7 +105,9 @@ std::string FrameDecoder::describe_sdo(const od::CanFrame& f, bool request) cons
         }
         return head + "download " + object_name(index, sub) +
                (sized ? fmt(", %u bytes (segmented)", od::get_u32(d + 4)) : " (segmented)");
-      case 0: return head + fmt("download segment toggle %u", (d[0] >> 4) & 1) + ((d[0] & 1) ? ", last" : "");
+      case 0:
+        return head + fmt("download segment toggle %u", (d[0] >> 4) & 1) +
+               ((d[0] & 1) ? ", last" : "");
       case 2: return head + "upload " + object_name(index, sub);
       case 3: return head + fmt("upload segment toggle %u", (d[0] >> 4) & 1);
       case 5: return head + "block upload " + (d[0] & 3 ? "" : object_name(index, sub));
@@ -115,11 +123,12 @@ std::string FrameDecoder::describe_sdo(const od::CanFrame& f, bool request) cons
         size_t n = sized ? 4 - ((d[0] >> 2) & 3) : 4;
         return head + "upload " + object_name(index, sub) + " = " + hex_bytes(d + 4, n);
       }
-      return head + "upload " + object_name(index, sub) + fmt(", %u bytes (segmented)", od::get_u32(d + 4));
+      return head + "upload " + object_name(index, sub) +
+             fmt(", %u bytes (segmented)", od::get_u32(d + 4));
     case 0: {
       size_t n = 7 - ((d[0] >> 1) & 7);
-      return head + fmt("upload segment toggle %u", (d[0] >> 4) & 1) + ((d[0] & 1) ? ", last: " : ": ") +
-             hex_bytes(d + 1, n);
+      return head + fmt("upload segment toggle %u", (d[0] >> 4) & 1) +
+             ((d[0] & 1) ? ", last: " : ": ") + hex_bytes(d + 1, n);
     }
     default: return head + "block transfer " + hex_bytes(d, 8);
   }
@@ -132,13 +141,15 @@ std::string FrameDecoder::describe_pdo(const od::CanFrame& f) const {
     unsigned fn = f.id >> 7, node = f.id & 0x7F;
     bool tpdo = fn % 2 == 1;
     unsigned number = (fn - (tpdo ? 3 : 4)) / 2 + 1;
-    return fmt(tpdo ? "TPDO%u node %u" : "RPDO%u node %u", number, node) + " (mapping unknown): " +
-           hex_bytes(f.data.data(), f.dlc);
+    return fmt(tpdo ? "TPDO%u node %u" : "RPDO%u node %u", number, node) +
+           " (mapping unknown): " + hex_bytes(f.data.data(), f.dlc);
   }
   const PdoLayout& p = it->second;
   std::string out = fmt(p.transmit ? "TPDO%u node %u:" : "RPDO%u node %u:", p.number, p.node);
   size_t need = od::mapping_bytes(p.mapping);
-  if (f.dlc < need) return out + fmt(" too short (%u of %u bytes): ", f.dlc, static_cast<unsigned>(need)) + hex_bytes(f.data.data(), f.dlc);
+  if (f.dlc < need)
+    return out + fmt(" too short (%u of %u bytes): ", f.dlc, static_cast<unsigned>(need)) +
+           hex_bytes(f.data.data(), f.dlc);
   size_t offset = 0;
   std::span<const uint8_t> data(f.data.data(), f.dlc);
   for (const auto& m : p.mapping) {
@@ -149,7 +160,8 @@ std::string FrameDecoder::describe_pdo(const od::CanFrame& f) const {
     od::DataType type = info ? info->type : od::DataType::Unsigned32;
     od::Bytes bytes = od::encode<uint64_t>(raw);
     bytes.resize((m.bits + 7) / 8);
-    out += " " + (info ? info->name : fmt("0x%04X:%02X", m.index, m.sub)) + " = " + od::format_value(type, bytes);
+    out += " " + (info ? info->name : fmt("0x%04X:%02X", m.index, m.sub)) + " = " +
+           od::format_value(type, bytes);
     out += ";";
   }
   if (!out.empty() && out.back() == ';') out.pop_back();

@@ -18,24 +18,30 @@ int integer8(uint8_t byte) { return byte >= 0x80 ? int{byte} - 0x100 : int{byte}
 
 }  // namespace
 
-int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string& words, int wait_timeout_s) {
+int run_hp_command(MasterBus& bus, int node, unsigned channel, const std::string& words,
+                   int wait_timeout_s) {
   const auto plan = plan_hp_words(words, channel);  // bad words: nothing is sent
   return run_hp_plan(bus, node, channel, plan, wait_timeout_s, {});
 }
 
-int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<HpAccess>& plan, int wait_timeout_s,
-                const std::function<void()>& idle) {
+int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<HpAccess>& plan,
+                int wait_timeout_s, const std::function<void()>& idle) {
   const uint8_t id = static_cast<uint8_t>(node);
   auto refused = [&](const HpAccess& a, const od::SdoResult& r) {
-    std::fprintf(stderr, "stepctl: node %d channel %u: 0x%04X:%02X refused: 0x%08X %s\n", node, channel, a.index, a.sub,
-                 static_cast<uint32_t>(r.abort), std::string(od::abort_text(r.abort)).c_str());
+    std::fprintf(stderr, "stepctl: node %d channel %u: 0x%04X:%02X refused: 0x%08X %s\n", node,
+                 channel, a.index, a.sub, static_cast<uint32_t>(r.abort),
+                 std::string(od::abort_text(r.abort)).c_str());
     // Why, in the manual's words.
     if (r.abort == od::SdoAbort::DeviceState) {
       od::SdoResult e = bus.upload(id, hp44714a::obj::index(channel, hp44714a::obj::kError), 0);
-      if (e.ok()) std::fprintf(stderr, "stepctl: ERROR %u \"%s\"\n", e.data.at(0), hp_error_text(e.data.at(0)).c_str());
+      if (e.ok())
+        std::fprintf(stderr, "stepctl: ERROR %u \"%s\"\n", e.data.at(0),
+                     hp_error_text(e.data.at(0)).c_str());
     } else if (r.abort == od::SdoAbort::ParameterIncompatible) {
       od::SdoResult e = bus.upload(id, hp44714a::obj::index(channel, hp44714a::obj::kConflict), 0);
-      if (e.ok()) std::fprintf(stderr, "stepctl: settings conflict: %s\n", hp_conflict_text(e.data.at(0)).c_str());
+      if (e.ok())
+        std::fprintf(stderr, "stepctl: settings conflict: %s\n",
+                     hp_conflict_text(e.data.at(0)).c_str());
     }
     return 1;
   };
@@ -67,9 +73,10 @@ int run_hp_plan(MasterBus& bus, int node, unsigned channel, const std::vector<Hp
         int code = integer8(r.data.at(0));
         if (code == -3) {
           // A command without NOWAIT under a trigger other than AUTO: locked in its wait state.
-          std::fprintf(stderr,
-                       "stepctl: waiting for a trigger it cannot get without NOWAIT (HP 3-13 note 1); "
-                       "TRIG HOLD cancels it\n");
+          std::fprintf(
+              stderr,
+              "stepctl: waiting for a trigger it cannot get without NOWAIT (HP 3-13 note 1); "
+              "TRIG HOLD cancels it\n");
           return 1;
         }
         if (code != -2) break;

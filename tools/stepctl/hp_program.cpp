@@ -10,7 +10,8 @@ namespace stepnode::tools {
 namespace {
 
 std::string upper(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
   return s;
 }
 
@@ -48,8 +49,10 @@ HpStatement statement(const std::string& text, int file_line) {
   const std::string up = upper(text);
   if (up.rfind("OUTPUT", 0) == 0) {
     // OUTPUT 709;"...": the string between the first pair of quotes.
-    const auto open = text.find('"'), close = open == std::string::npos ? open : text.find('"', open + 1);
-    if (close == std::string::npos) throw std::invalid_argument(error_at(file_line, "OUTPUT needs a quoted command string"));
+    const auto open = text.find('"'),
+               close = open == std::string::npos ? open : text.find('"', open + 1);
+    if (close == std::string::npos)
+      throw std::invalid_argument(error_at(file_line, "OUTPUT needs a quoted command string"));
     s.text = text.substr(open + 1, close - open - 1);
     return s;
   }
@@ -57,7 +60,9 @@ HpStatement statement(const std::string& text, int file_line) {
   if (first == "PAUSE") s.kind = HpStatement::Pause;
   else if (first == "END") s.kind = HpStatement::End;
   else if (first == "ENTER" || first == "PRINT") s.kind = HpStatement::Ignored;
-  else throw std::invalid_argument(error_at(file_line, "'" + first + "' is not OUTPUT, PAUSE, ENTER, PRINT or END"));
+  else
+    throw std::invalid_argument(
+        error_at(file_line, "'" + first + "' is not OUTPUT, PAUSE, ENTER, PRINT or END"));
   return s;
 }
 
@@ -70,8 +75,11 @@ int channel_of(const std::string& w) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != w.size() || n < 0) throw std::invalid_argument("USE: '" + w + "' is not a slot and channel (e.g. 500)");
-  if (n % 100 > 7) throw std::invalid_argument("USE " + w + ": channel " + std::to_string(n % 100) + " is not one of a node's axes 0..7");
+  if (used != w.size() || n < 0)
+    throw std::invalid_argument("USE: '" + w + "' is not a slot and channel (e.g. 500)");
+  if (n % 100 > 7)
+    throw std::invalid_argument("USE " + w + ": channel " + std::to_string(n % 100) +
+                                " is not one of a node's axes 0..7");
   return n % 100;
 }
 
@@ -83,7 +91,8 @@ double seconds_of(const std::string& w) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != w.size() || !(v >= 0)) throw std::invalid_argument("WAIT: '" + w + "' is not a number of seconds");
+  if (used != w.size() || !(v >= 0))
+    throw std::invalid_argument("WAIT: '" + w + "' is not a number of seconds");
   return v;
 }
 
@@ -104,12 +113,15 @@ HpProgramCommand command_of(const std::string& text) {
   } else if (w.size() == 4 && first == "ON" && w[1] == "INTR" && w[2] == "CALL") {
     c.kind = HpProgramCommand::OnIntrCall;
     c.name = w[3];
-  } else if (w.size() == 3 && (first == "ENABLE" || first == "DISABLE") && w[1] == "INTR" && w[2] == "SYS") {
+  } else if (w.size() == 3 && (first == "ENABLE" || first == "DISABLE") && w[1] == "INTR" &&
+             w[2] == "SYS") {
     c.kind = HpProgramCommand::SystemInterrupt;
     c.on = first == "ENABLE";
   } else if (first == "SUB" || first == "SUBEND" || first == "BEEP") {
     if (first == "SUB" && w.size() != 2) throw std::invalid_argument("SUB takes a name");
-    c.kind = first == "SUB" ? HpProgramCommand::Sub : first == "SUBEND" ? HpProgramCommand::SubEnd : HpProgramCommand::Beep;
+    c.kind = first == "SUB"      ? HpProgramCommand::Sub
+             : first == "SUBEND" ? HpProgramCommand::SubEnd
+                                 : HpProgramCommand::Beep;
     if (first == "SUB") c.name = w[1];
   } else {
     // The module's words, with the channel of a trailing "USE ssc" for this command only.
@@ -125,7 +137,8 @@ HpProgramCommand command_of(const std::string& text) {
 
 }  // namespace
 
-std::vector<HpStatement> parse_hp_program(const std::string& listing, std::vector<std::string>* notes) {
+std::vector<HpStatement> parse_hp_program(const std::string& listing,
+                                          std::vector<std::string>* notes) {
   std::map<int, HpStatement> numbered;
   std::vector<HpStatement> in_order;
   std::istringstream in(listing);
@@ -143,7 +156,8 @@ std::vector<HpStatement> parse_hp_program(const std::string& listing, std::vecto
       if (text.empty()) continue;  // a numbered empty line
     }
     if ((number > 0 && !in_order.empty()) || (number == 0 && !numbered.empty()))
-      throw std::invalid_argument(error_at(file_line, "a listing has line numbers on every line or on none"));
+      throw std::invalid_argument(
+          error_at(file_line, "a listing has line numbers on every line or on none"));
     HpStatement s = statement(text, file_line);
     s.line = number;
     if (number == 0) {
@@ -151,11 +165,13 @@ std::vector<HpStatement> parse_hp_program(const std::string& listing, std::vecto
       continue;
     }
     if (numbered.contains(number) && notes)
-      notes->push_back("line " + std::to_string(number) + " (file line " + std::to_string(file_line) +
-                       ") replaces the earlier line " + std::to_string(number));
+      notes->push_back("line " + std::to_string(number) + " (file line " +
+                       std::to_string(file_line) + ") replaces the earlier line " +
+                       std::to_string(number));
     numbered[number] = s;
   }
-  if (numbered.empty() && in_order.empty()) throw std::invalid_argument("the program has no statements");
+  if (numbered.empty() && in_order.empty())
+    throw std::invalid_argument("the program has no statements");
   for (const auto& [number, s] : numbered) in_order.push_back(s);
   return in_order;
 }
@@ -171,7 +187,8 @@ std::vector<HpProgramCommand> parse_hp_command_string(const std::string& text) {
 std::string hp_reset_words() {
   // The power-on/reset state of 3-2. PSCALE before PROFILE: PROFILE FREQ values are in the
   // units of the PSCALE in effect (3-9).
-  return "TRIG HOLD; HALT SGL; DISABLE INTR; PSCALE 1; PROFILE FREQ 0 250 500 50E-6; DELAY 0; STANDBY AUTO HI; "
+  return "TRIG HOLD; HALT SGL; DISABLE INTR; PSCALE 1; PROFILE FREQ 0 250 500 50E-6; DELAY 0; "
+         "STANDBY AUTO HI; "
          "PULSE SS LO LO; HALT LO; HARDLIM LO LO; QSCALE 1; QINDEX OFF; TRIG AUTO";
 }
 

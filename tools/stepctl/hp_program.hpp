@@ -31,16 +31,27 @@ struct HpStatement {
 
 // The statements in the order they run. `notes` gets a line for each replaced line number.
 // Throws std::invalid_argument naming the file line and the rule.
-std::vector<HpStatement> parse_hp_program(const std::string& listing, std::vector<std::string>* notes = nullptr);
+std::vector<HpStatement> parse_hp_program(const std::string& listing,
+                                          std::vector<std::string>* notes = nullptr);
 
 // One command of a command string.
 struct HpProgramCommand {
-  enum Kind { Module, Use, Wait, Reset, OnIntrCall, SystemInterrupt, Sub, SubEnd, Beep } kind = Module;
-  std::string words;     // Module: the module's words, without a trailing USE
-  int channel = -1;      // Use, or a Module command's own USE (-1: the current channel)
-  double seconds = 0;    // Wait
-  bool on = false;       // SystemInterrupt
-  std::string name;      // OnIntrCall, Sub
+  enum Kind {
+    Module,
+    Use,
+    Wait,
+    Reset,
+    OnIntrCall,
+    SystemInterrupt,
+    Sub,
+    SubEnd,
+    Beep
+  } kind = Module;
+  std::string words;   // Module: the module's words, without a trailing USE
+  int channel = -1;    // Use, or a Module command's own USE (-1: the current channel)
+  double seconds = 0;  // Wait
+  bool on = false;     // SystemInterrupt
+  std::string name;    // OnIntrCall, Sub
 };
 
 // The commands of one OUTPUT string, split at ';' (empty ones dropped). Throws

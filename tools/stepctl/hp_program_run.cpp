@@ -37,7 +37,11 @@ const char* event_text(uint8_t event) {
 class ProgramRunner {
  public:
   ProgramRunner(MasterBus& bus, int node, unsigned channel, int wait_s)
-      : bus_(bus), id_(static_cast<uint8_t>(node)), node_(node), channel_(channel), wait_s_(wait_s) {
+      : bus_(bus),
+        id_(static_cast<uint8_t>(node)),
+        node_(node),
+        channel_(channel),
+        wait_s_(wait_s) {
     channels_.insert(channel);
   }
 
@@ -81,7 +85,8 @@ class ProgramRunner {
 
   int module(const std::string& words, unsigned ch) {
     channels_.insert(ch);
-    return run_hp_plan(bus_, node_, ch, plan_hp_words(words, ch), wait_s_, [this] { poll_interrupts(); });
+    return run_hp_plan(bus_, node_, ch, plan_hp_words(words, ch), wait_s_,
+                       [this] { poll_interrupts(); });
   }
 
   // RST slot: every channel of the module (those the node has) to its power-on state.
@@ -94,10 +99,12 @@ class ProgramRunner {
   }
 
   int wait(double seconds) {
-    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(seconds));
     while (Clock::now() < end) {
       poll_interrupts();
-      std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(20), end - Clock::now()));
+      std::this_thread::sleep_for(
+          std::min<Clock::duration>(std::chrono::milliseconds(20), end - Clock::now()));
     }
     poll_interrupts();
     return 0;
@@ -194,7 +201,8 @@ void check_hp_program(const std::string& listing, unsigned channel) {
   check_program(parse_hp_program(listing), channel);
 }
 
-int run_hp_program(MasterBus& bus, int node, unsigned channel, const std::string& listing, int wait_timeout_s) {
+int run_hp_program(MasterBus& bus, int node, unsigned channel, const std::string& listing,
+                   int wait_timeout_s) {
   std::vector<std::string> notes;
   const std::vector<HpStatement> program = parse_hp_program(listing, &notes);
   check_program(program, channel);

@@ -15,7 +15,8 @@ namespace {
 using namespace hp44714a::obj;
 
 std::string upper(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
   return s;
 }
 
@@ -59,26 +60,32 @@ struct Planner {
   std::vector<HpAccess> out;
 
   uint16_t at(uint16_t offset) const { return index(ch, offset); }
-  void write(uint16_t offset, uint8_t sub, od::Bytes data) { out.push_back({HpAccess::Write, at(offset), sub, std::move(data), {}, {}}); }
+  void write(uint16_t offset, uint8_t sub, od::Bytes data) {
+    out.push_back({HpAccess::Write, at(offset), sub, std::move(data), {}, {}});
+  }
   void u8(uint16_t offset, uint8_t sub, uint8_t v) { write(offset, sub, od::encode<uint8_t>(v)); }
   void real(uint16_t offset, uint8_t sub, double v) { write(offset, sub, od::encode<double>(v)); }
   void read(uint16_t offset, uint8_t sub, od::DataType type, std::string label) {
     out.push_back({HpAccess::Read, at(offset), sub, {}, type, std::move(label)});
   }
-  void wait_running() { out.push_back({HpAccess::WaitWhileRunning, at(kDone), 0, {}, od::DataType::Integer8, "DONE?"}); }
+  void wait_running() {
+    out.push_back({HpAccess::WaitWhileRunning, at(kDone), 0, {}, od::DataType::Integer8, "DONE?"});
+  }
 
   using Words = std::vector<std::string>;  // the command, then its parameters
 
   // Checks the number of parameters (the words after the command).
   static void need(const Words& w, size_t lo, size_t hi) {
     if (w.size() - 1 < lo || w.size() - 1 > hi)
-      throw std::invalid_argument(w[0] + ": takes " + std::to_string(lo) + (lo == hi ? "" : ".." + std::to_string(hi)) +
+      throw std::invalid_argument(w[0] + ": takes " + std::to_string(lo) +
+                                  (lo == hi ? "" : ".." + std::to_string(hi)) +
                                   " parameters, got " + std::to_string(w.size() - 1));
   }
 
   void profile(const Words& w) {
     need(w, 5, 5);
-    if (w[1] != "FREQ" && w[1] != "WIDTH") throw std::invalid_argument("PROFILE: mode must be FREQ or WIDTH");
+    if (w[1] != "FREQ" && w[1] != "WIDTH")
+      throw std::invalid_argument("PROFILE: mode must be FREQ or WIDTH");
     u8(kProfile, hp44714a::profile_sub::kMode, w[1] == "WIDTH" ? 1 : 0);
     for (uint8_t k = 0; k < 4; ++k)
       real(kProfile, static_cast<uint8_t>(hp44714a::profile_sub::kMin + k), number(w[0], w[2 + k]));
@@ -104,17 +111,19 @@ struct Planner {
       else throw std::invalid_argument(c + ": unknown option '" + w[k] + "'");
     }
     u8(kMove, hp44714a::move_sub::kNowait, nowait ? 1 : 0);
-    if (c == "MOVE") real(kMove, absolute ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative, v);
+    if (c == "MOVE")
+      real(kMove, absolute ? hp44714a::move_sub::kAbsolute : hp44714a::move_sub::kRelative, v);
     else real(kSustain, 0, v);
     if (!nowait) wait_running();  // without NOWAIT the command completes first (3-12)
   }
 
   void trig(const Words& w) {
     need(w, 0, 1);
-    static const std::map<std::string, uint8_t> modes = {{"HOLD", 0}, {"AUTO", 1}, {"INT", 1}, {"SGL", 2},
-                                                         {"SYS", 3},  {"CHAN0", 4}, {"CHAN", 4}};
+    static const std::map<std::string, uint8_t> modes = {
+        {"HOLD", 0}, {"AUTO", 1}, {"INT", 1}, {"SGL", 2}, {"SYS", 3}, {"CHAN0", 4}, {"CHAN", 4}};
     std::string m = w.size() > 1 ? w[1] : "SGL";  // "TRIG" alone is TRIG SGL
-    if (!modes.contains(m)) throw std::invalid_argument("TRIG: mode must be HOLD, AUTO, INT, SGL, SYS or CHAN0");
+    if (!modes.contains(m))
+      throw std::invalid_argument("TRIG: mode must be HOLD, AUTO, INT, SGL, SYS or CHAN0");
     u8(kTrig, 0, modes.at(m));
   }
 
@@ -172,7 +181,8 @@ struct Planner {
     const std::string& c = w[0];
     if (c == "POS?") read(kPosition, 0, od::DataType::Real64, "POS?");
     else if (c == "DONE?") read(kDone, 0, od::DataType::Integer8, "DONE?");
-    else if (c == "QPOS?") read(kQuadrature, hp44714a::quad_sub::kQpos, od::DataType::Real64, "QPOS?");
+    else if (c == "QPOS?")
+      read(kQuadrature, hp44714a::quad_sub::kQpos, od::DataType::Real64, "QPOS?");
     else read(kError, 0, od::DataType::Unsigned8, "ERROR?");
   }
 
@@ -211,13 +221,27 @@ struct Planner {
       throw std::invalid_argument(c + ": USE ch is given with --axis (channel 0 = axis 1)");
     using Handler = void (Planner::*)(const Words&);
     static const std::map<std::string, Handler> handlers = {
-        {"PROFILE", &Planner::profile}, {"PSCALE", &Planner::pscale},   {"MOVE", &Planner::move_or_sustain},
-        {"SUSTAIN", &Planner::move_or_sustain}, {"TRIG", &Planner::trig}, {"DELAY", &Planner::delay},
-        {"STANDBY", &Planner::standby}, {"PULSE", &Planner::pulse},     {"HARDLIM", &Planner::hardlim},
-        {"HALT", &Planner::halt},       {"POS", &Planner::pos},         {"POS?", &Planner::query},
-        {"DONE?", &Planner::query},     {"ERR?", &Planner::query},      {"ERROR?", &Planner::query},
-        {"QSCALE", &Planner::qscale},   {"QINDEX", &Planner::qindex},   {"QPOS?", &Planner::query},
-        {"ENABLE", &Planner::interrupts}, {"DISABLE", &Planner::interrupts}, {"TEST", &Planner::test},
+        {"PROFILE", &Planner::profile},
+        {"PSCALE", &Planner::pscale},
+        {"MOVE", &Planner::move_or_sustain},
+        {"SUSTAIN", &Planner::move_or_sustain},
+        {"TRIG", &Planner::trig},
+        {"DELAY", &Planner::delay},
+        {"STANDBY", &Planner::standby},
+        {"PULSE", &Planner::pulse},
+        {"HARDLIM", &Planner::hardlim},
+        {"HALT", &Planner::halt},
+        {"POS", &Planner::pos},
+        {"POS?", &Planner::query},
+        {"DONE?", &Planner::query},
+        {"ERR?", &Planner::query},
+        {"ERROR?", &Planner::query},
+        {"QSCALE", &Planner::qscale},
+        {"QINDEX", &Planner::qindex},
+        {"QPOS?", &Planner::query},
+        {"ENABLE", &Planner::interrupts},
+        {"DISABLE", &Planner::interrupts},
+        {"TEST", &Planner::test},
     };
     const auto h = handlers.find(c);
     if (h == handlers.end()) throw std::invalid_argument("'" + c + "' is not an HP 44714A command");

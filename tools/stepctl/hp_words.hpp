@@ -15,9 +15,9 @@ struct HpAccess {
   enum Kind { Write, Read, WaitWhileRunning } kind = Write;
   uint16_t index = 0;
   uint8_t sub = 0;
-  od::Bytes data;                              // Write
+  od::Bytes data;                               // Write
   od::DataType type = od::DataType::Unsigned8;  // Read: how to print it
-  std::string label;                           // Read: what the answer is ("POS?")
+  std::string label;                            // Read: what the answer is ("POS?")
 };
 
 // One command ("MOVE 20 NOWAIT") or several separated by ';'. `channel` is the HP channel

@@ -9,10 +9,13 @@ namespace {
 
 constexpr uint32_t kMasterToSlave = 0x7E5, kSlaveToMaster = 0x7E4;
 constexpr uint8_t kSwitchGlobal = 0x04, kConfigureNodeId = 0x11, kConfigureBitTiming = 0x13,
-                  kActivateBitTiming = 0x15, kStore = 0x17, kSwitchSelective = 0x40, kSwitchSelectiveAnswer = 0x44,
-                  kIdentifySlave = 0x4F, kFastScan = 0x51, kInquireVendor = 0x5A, kInquireNodeId = 0x5E;
-constexpr uint8_t kFastScanReset = 0x80;  // BitChecked 0x80: every non-configured slave answers, and restarts
-constexpr const char* kPartNames[] = {"vendor-ID", "product code", "revision number", "serial number"};
+                  kActivateBitTiming = 0x15, kStore = 0x17, kSwitchSelective = 0x40,
+                  kSwitchSelectiveAnswer = 0x44, kIdentifySlave = 0x4F, kFastScan = 0x51,
+                  kInquireVendor = 0x5A, kInquireNodeId = 0x5E;
+constexpr uint8_t kFastScanReset =
+    0x80;  // BitChecked 0x80: every non-configured slave answers, and restarts
+constexpr const char* kPartNames[] = {"vendor-ID", "product code", "revision number",
+                                      "serial number"};
 using Identity = std::array<uint32_t, 4>;
 
 class LssMaster {
@@ -20,7 +23,8 @@ class LssMaster {
   LssMaster(MasterBus& bus, int timeout_ms) : bus_(bus), timeout_ms_(timeout_ms) {}
 
   void send(uint8_t cs, std::array<uint8_t, 7> rest = {}) {
-    od::CanFrame f(kMasterToSlave, {cs, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5], rest[6]});
+    od::CanFrame f(kMasterToSlave,
+                   {cs, rest[0], rest[1], rest[2], rest[3], rest[4], rest[5], rest[6]});
     bus_.send(f);
   }
   void send_u32(uint8_t cs, uint32_t v, uint8_t b5 = 0, uint8_t b6 = 0, uint8_t b7 = 0) {
@@ -33,14 +37,17 @@ class LssMaster {
     for (uint64_t now = monotonic_us(); now < deadline; now = monotonic_us()) {
       auto r = bus_.receive(static_cast<int>((deadline - now + 999) / 1000));
       if (!r) break;
-      if (r->frame.id == kSlaveToMaster && r->frame.dlc == 8 && r->frame.data[0] == cs) return r->frame;
+      if (r->frame.id == kSlaveToMaster && r->frame.dlc == 8 && r->frame.data[0] == cs)
+        return r->frame;
     }
     return std::nullopt;
   }
   od::CanFrame confirmed(uint8_t cs, const char* service) {
     auto a = answer(cs, timeout_ms_);
-    if (!a) throw std::runtime_error(std::string("no LSS slave answered ") + service + " within " +
-                                     std::to_string(timeout_ms_) + " ms (is one in configuration state?)");
+    if (!a)
+      throw std::runtime_error(std::string("no LSS slave answered ") + service + " within " +
+                               std::to_string(timeout_ms_) +
+                               " ms (is one in configuration state?)");
     return *a;
   }
   // A fast scan request is answered by every slave that matches: the first answer decides,
@@ -81,7 +88,8 @@ uint32_t parse_u32(const std::string& text, const char* what) {
     used = 0;
   }
   if (used == 0 || used != text.size() || v > 0xFFFFFFFFull || text[0] == '-')
-    throw std::invalid_argument(std::string(what) + " " + text + ": must be an integer 0..4294967295 (or 0x...)");
+    throw std::invalid_argument(std::string(what) + " " + text +
+                                ": must be an integer 0..4294967295 (or 0x...)");
   return static_cast<uint32_t>(v);
 }
 
@@ -89,16 +97,19 @@ uint32_t parse_u32(const std::string& text, const char* what) {
 void check_error(const od::CanFrame& a, const char* service, const char* error1) {
   const uint8_t error = a.data[1];
   if (error == 0) return;
-  const std::string why = error == 1 ? error1 : error == 2 && a.data[0] == kStore ? "storage media access error"
-                                  : error == 0xFF ? "manufacturer-specific error " + std::to_string(a.data[2])
-                                                  : "error " + std::to_string(error);
+  const std::string why = error == 1                          ? error1
+                          : error == 2 && a.data[0] == kStore ? "storage media access error"
+                          : error == 0xFF
+                              ? "manufacturer-specific error " + std::to_string(a.data[2])
+                              : "error " + std::to_string(error);
   throw std::runtime_error(std::string(service) + " refused by the slave: " + why);
 }
 
 void configure_node_id(LssMaster& m, uint8_t node_id) {
   m.drain();
   m.send(kConfigureNodeId, {node_id});
-  check_error(m.confirmed(kConfigureNodeId, "configure node-ID"), "configure node-ID", "node-ID out of range");
+  check_error(m.confirmed(kConfigureNodeId, "configure node-ID"), "configure node-ID",
+              "node-ID out of range");
 }
 
 void store(LssMaster& m) {
@@ -129,8 +140,8 @@ std::optional<Identity> fast_scan(LssMaster& m) {
     m.drain();
     m.send_u32(kFastScan, id[sub], 0, sub, next);
     if (!m.scan_answer())
-      throw std::runtime_error(std::string("fast scan: the ") + kPartNames[sub] + " found (" + hex8(id[sub]) +
-                               ") was not confirmed: a slave left the scan");
+      throw std::runtime_error(std::string("fast scan: the ") + kPartNames[sub] + " found (" +
+                               hex8(id[sub]) + ") was not confirmed: a slave left the scan");
   }
   return id;
 }
@@ -165,7 +176,8 @@ int cmd_inquire(LssMaster& m, const std::string& what) {
     else std::printf("node-ID %u\n", id);
     return 0;
   }
-  if (what != "identity") throw std::invalid_argument("lss inquire " + what + ": identity or node-id");
+  if (what != "identity")
+    throw std::invalid_argument("lss inquire " + what + ": identity or node-id");
   Identity id{};
   for (uint8_t i = 0; i < 4; ++i) {
     m.drain();
@@ -182,7 +194,8 @@ int cmd_switch(LssMaster& m, const std::vector<std::string>& w) {
     return 0;
   }
   if (w.size() != 6 || w[1] != "selective")
-    throw std::invalid_argument("lss switch: global waiting|configuration, or selective VENDOR PRODUCT REVISION SERIAL");
+    throw std::invalid_argument(
+        "lss switch: global waiting|configuration, or selective VENDOR PRODUCT REVISION SERIAL");
   Identity id{};
   for (unsigned i = 0; i < 4; ++i) id[i] = parse_u32(w[2 + i], kPartNames[i]);
   m.drain();
@@ -195,17 +208,22 @@ int cmd_switch(LssMaster& m, const std::vector<std::string>& w) {
 int cmd_configure(LssMaster& m, const std::vector<std::string>& w) {
   if (w.size() == 3 && w[1] == "node-id") {
     const uint32_t id = w[2] == "none" ? 0xFF : parse_u32(w[2], "node-ID");
-    if (id != 0xFF && (id < 1 || id > 127)) throw std::invalid_argument("lss configure node-id " + w[2] + ": 1..127 or none");
+    if (id != 0xFF && (id < 1 || id > 127))
+      throw std::invalid_argument("lss configure node-id " + w[2] + ": 1..127 or none");
     configure_node_id(m, static_cast<uint8_t>(id));
-    std::printf("node-ID %s configured (in effect at the slave's next reset communication)\n", w[2].c_str());
+    std::printf("node-ID %s configured (in effect at the slave's next reset communication)\n",
+                w[2].c_str());
     return 0;
   }
   if (w.size() == 3 && w[1] == "bit-timing") {
     auto index = lss_bit_timing_index(parse_u32(w[2], "bit rate"));
-    if (!index) throw std::invalid_argument("lss configure bit-timing " + w[2] + ": 1000, 800, 500, 250, 125, 50, 20 or 10 (kbit/s)");
+    if (!index)
+      throw std::invalid_argument("lss configure bit-timing " + w[2] +
+                                  ": 1000, 800, 500, 250, 125, 50, 20 or 10 (kbit/s)");
     m.drain();
     m.send(kConfigureBitTiming, {0, *index});  // table selector 0: CiA 305's table
-    check_error(m.confirmed(kConfigureBitTiming, "configure bit timing"), "configure bit timing", "bit rate not supported");
+    check_error(m.confirmed(kConfigureBitTiming, "configure bit timing"), "configure bit timing",
+                "bit rate not supported");
     std::printf("bit timing %s kbit/s configured (table index %u)\n", w[2].c_str(), *index);
     return 0;
   }
@@ -223,15 +241,20 @@ std::optional<uint8_t> lss_bit_timing_index(unsigned kbit) {
 }
 
 CLI::App* add_lss_command(CLI::App& app, LssArgs& args) {
-  auto* lss = app.add_subcommand("lss", "LSS master (CiA 305): switch global waiting|configuration, switch selective "
-                                        "V P R S, configure node-id N|bit-timing KBIT, activate-bit-timing, store, "
-                                        "inquire identity|node-id, fast-scan");
+  auto* lss = app.add_subcommand(
+      "lss",
+      "LSS master (CiA 305): switch global waiting|configuration, switch selective "
+      "V P R S, configure node-id N|bit-timing KBIT, activate-bit-timing, store, "
+      "inquire identity|node-id, fast-scan");
   lss->add_option("words", args.words, "the service and its arguments")->required();
-  lss->add_option("--delay", args.delay_ms, "activate-bit-timing: switch delay in ms")->check(CLI::Range(0, 65535));
-  lss->add_option("--assign", args.assign, "fast-scan: give the slaves found node-IDs from this one up")
+  lss->add_option("--delay", args.delay_ms, "activate-bit-timing: switch delay in ms")
+      ->check(CLI::Range(0, 65535));
+  lss->add_option("--assign", args.assign,
+                  "fast-scan: give the slaves found node-IDs from this one up")
       ->check(CLI::Range(1, 127));
   lss->add_flag("--store", args.store, "fast-scan --assign: store each slave's configuration");
-  lss->add_option("--scan-timeout", args.scan_timeout_ms, "fast-scan: ms of silence that mean no match")
+  lss->add_option("--scan-timeout", args.scan_timeout_ms,
+                  "fast-scan: ms of silence that mean no match")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
   return lss;
@@ -250,11 +273,13 @@ int run_lss_command(MasterBus& bus, const LssArgs& args, int timeout_ms) {
     return 0;
   }
   if (service == "activate-bit-timing" && w.size() == 1) {
-    m.send(kActivateBitTiming, {static_cast<uint8_t>(args.delay_ms), static_cast<uint8_t>(args.delay_ms >> 8)});
+    m.send(kActivateBitTiming,
+           {static_cast<uint8_t>(args.delay_ms), static_cast<uint8_t>(args.delay_ms >> 8)});
     return 0;
   }
   if (service == "fast-scan" && w.size() == 1) return cmd_fast_scan(m, args);
-  throw std::invalid_argument("lss " + service + ": not an LSS service (switch, configure, activate-bit-timing, "
+  throw std::invalid_argument("lss " + service +
+                              ": not an LSS service (switch, configure, activate-bit-timing, "
                               "store, inquire, fast-scan)");
 }
 

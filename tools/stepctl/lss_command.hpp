@@ -22,11 +22,12 @@
 namespace stepnode::tools {
 
 struct LssArgs {
-  std::vector<std::string> words;  // the service and its arguments, e.g. {"configure", "node-id", "6"}
-  int delay_ms = 0;                // activate bit timing: the switch delay
-  std::optional<int> assign;       // fast scan: give the slaves found node-IDs from this one up
-  bool store = false;              // fast scan with --assign: store each configuration
-  int scan_timeout_ms = 100;       // fast scan: silence that means "no slave matches"
+  std::vector<std::string>
+      words;                  // the service and its arguments, e.g. {"configure", "node-id", "6"}
+  int delay_ms = 0;           // activate bit timing: the switch delay
+  std::optional<int> assign;  // fast scan: give the slaves found node-IDs from this one up
+  bool store = false;         // fast scan with --assign: store each configuration
+  int scan_timeout_ms = 100;  // fast scan: silence that means "no slave matches"
 };
 
 // Adds `lss` to `app` (its words parsed into `args`).

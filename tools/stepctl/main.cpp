@@ -10,14 +10,14 @@
 
 #include "od/sdo_abort.hpp"
 #include "od/value_codec.hpp"
-#include "tools/stepctl/master_bus.hpp"
-#include "tools/stepctl/object_catalog.hpp"
-#include "tools/stepctl/watch.hpp"
 #include "tools/stepctl/axis_commands.hpp"
 #include "tools/stepctl/drive_command.hpp"
 #include "tools/stepctl/hp_command.hpp"
-#include "tools/stepctl/lss_command.hpp"
 #include "tools/stepctl/hp_words.hpp"
+#include "tools/stepctl/lss_command.hpp"
+#include "tools/stepctl/master_bus.hpp"
+#include "tools/stepctl/object_catalog.hpp"
+#include "tools/stepctl/watch.hpp"
 
 using namespace stepnode;
 using namespace stepnode::tools;
@@ -34,14 +34,17 @@ std::string addr(uint16_t index, uint8_t sub) {
   return buf;
 }
 
-od::SdoClient::Mode mode_of(bool block) { return block ? od::SdoClient::Mode::Block : od::SdoClient::Mode::Auto; }
+od::SdoClient::Mode mode_of(bool block) {
+  return block ? od::SdoClient::Mode::Block : od::SdoClient::Mode::Auto;
+}
 
 void check(const od::SdoResult& r, uint8_t node, uint16_t index, uint8_t sub) {
   if (r.ok()) return;
   char buf[32];
   std::snprintf(buf, sizeof buf, "0x%08X", static_cast<uint32_t>(r.abort));
   throw Failure("node " + std::to_string(node) + " " + addr(index, sub) + ": " +
-                (r.aborted_by_server ? "abort " : "failed ") + buf + " " + std::string(od::abort_text(r.abort)));
+                (r.aborted_by_server ? "abort " : "failed ") + buf + " " +
+                std::string(od::abort_text(r.abort)));
 }
 
 // ---- nmt ------------------------------------------------------------------------------
@@ -60,10 +63,10 @@ int cmd_nmt(MasterBus& bus, const std::string& what, int node, int timeout_ms) {
   uint64_t deadline = monotonic_us() + static_cast<uint64_t>(timeout_ms) * 1000;
   while (monotonic_us() < deadline) {
     auto r = bus.receive(static_cast<int>((deadline - monotonic_us()) / 1000) + 1);
-    if (r && r->frame.id == od::cob::kHeartbeat + static_cast<uint32_t>(node) && r->frame.dlc == 1 &&
-        r->frame.data[0] == expect) {
-      std::cout << "node " << node << ": " << (expect == 0 ? "boot-up after " + what : what + " confirmed")
-                << "\n";
+    if (r && r->frame.id == od::cob::kHeartbeat + static_cast<uint32_t>(node) &&
+        r->frame.dlc == 1 && r->frame.data[0] == expect) {
+      std::cout << "node " << node << ": "
+                << (expect == 0 ? "boot-up after " + what : what + " confirmed") << "\n";
       return 0;
     }
   }
@@ -76,20 +79,22 @@ std::string show(const ObjectCatalog& cat, uint16_t index, uint8_t sub, const od
   auto info = cat.find(index, sub);
   if (!info) return addr(index, sub) + " = " + od::format_value(od::DataType::Domain, data);
   bool hex = info->type == od::DataType::Unsigned32 && (index < 0x2000);
-  return addr(index, sub) + " " + info->name + " = " + od::format_value(info->type, data, hex) + " (" +
-         std::string(od::type_name(info->type)) + ")";
+  return addr(index, sub) + " " + info->name + " = " + od::format_value(info->type, data, hex) +
+         " (" + std::string(od::type_name(info->type)) + ")";
 }
 
-int cmd_read(MasterBus& bus, const ObjectCatalog& cat, int node, const std::string& object, bool block,
-             const std::string& output) {
+int cmd_read(MasterBus& bus, const ObjectCatalog& cat, int node, const std::string& object,
+             bool block, const std::string& output) {
   auto [index, sub] = parse_object_address(object);
   od::SdoResult r = bus.upload(static_cast<uint8_t>(node), index, sub, mode_of(block));
   check(r, static_cast<uint8_t>(node), index, sub);
   if (!output.empty()) {
     std::ofstream out(output, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(r.data.data()), static_cast<std::streamsize>(r.data.size()));
+    out.write(reinterpret_cast<const char*>(r.data.data()),
+              static_cast<std::streamsize>(r.data.size()));
     if (!out) throw Failure("cannot write " + output);
-    std::cout << addr(index, sub) << ": " << r.data.size() << " bytes written to " << output << "\n";
+    std::cout << addr(index, sub) << ": " << r.data.size() << " bytes written to " << output
+              << "\n";
     return 0;
   }
   std::cout << show(cat, index, sub, r.data) << "\n";
@@ -102,7 +107,9 @@ int cmd_write(MasterBus& bus, const ObjectCatalog& cat, int node, const std::str
   od::DataType type;
   if (!type_name.empty()) {
     auto t = od::type_from_name(type_name);
-    if (!t) throw std::invalid_argument("--type " + type_name + ": not a CiA 301 type name (e.g. UNSIGNED16)");
+    if (!t)
+      throw std::invalid_argument("--type " + type_name +
+                                  ": not a CiA 301 type name (e.g. UNSIGNED16)");
     type = *t;
   } else if (auto info = cat.find(index, sub)) {
     type = info->type;
@@ -128,8 +135,10 @@ int cmd_dump(MasterBus& bus, const ObjectCatalog& cat, int node) {
   int failures = 0;
   for (const auto& o : cat.all()) {
     if (o.access == od::Access::WriteOnly) continue;
-    od::SdoResult r = bus.upload(static_cast<uint8_t>(node), o.index, o.sub, od::SdoClient::Mode::Auto);
-    if (r.abort == od::SdoAbort::Timeout) throw Failure("node " + std::to_string(node) + ": no SDO answer");
+    od::SdoResult r =
+        bus.upload(static_cast<uint8_t>(node), o.index, o.sub, od::SdoClient::Mode::Auto);
+    if (r.abort == od::SdoAbort::Timeout)
+      throw Failure("node " + std::to_string(node) + ": no SDO answer");
     if (r.ok()) {
       std::cout << show(cat, o.index, o.sub, r.data) << "\n";
     } else if (r.abort != od::SdoAbort::NoObject && r.abort != od::SdoAbort::NoSubindex) {
@@ -177,19 +186,25 @@ constexpr const char* kAxisVerbs[] = {"clear", "home", "move", "jog", "stop", "e
 
 void add_bus_options(CLI::App& app, Options& o) {
   app.add_option("--iface", o.iface, "SocketCAN interface")->capture_default_str();
-  app.add_option("--eds", o.eds, "EDS file describing the node's objects (default: stepnode's own)");
-  app.add_option("--timeout", o.timeout_ms, "SDO / confirmation timeout in ms")->capture_default_str();
-  app.add_option("--sdo-cob-ids", o.sdo_cob_ids,
-                 "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
-                 "0x1201..0x1203 sub 1 and 2 (e.g. 0x695,0x6D5); default: 0x600+id,0x580+id (0x1200)");
+  app.add_option("--eds", o.eds,
+                 "EDS file describing the node's objects (default: stepnode's own)");
+  app.add_option("--timeout", o.timeout_ms, "SDO / confirmation timeout in ms")
+      ->capture_default_str();
+  app.add_option(
+      "--sdo-cob-ids", o.sdo_cob_ids,
+      "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
+      "0x1201..0x1203 sub 1 and 2 (e.g. 0x695,0x6D5); default: 0x600+id,0x580+id (0x1200)");
 }
 
 // nmt, read, write, dump, watch.
 void add_object_commands(CLI::App& app, Options& o, Subcommands& s) {
   s.nmt = app.add_subcommand("nmt", "NMT command: start|stop|preop|reset-node|reset-comm");
-  s.nmt->add_option("command", o.nmt_what)->required()->check(
-      CLI::IsMember({"start", "stop", "preop", "reset-node", "reset-comm"}));
-  s.nmt->add_option("--node", o.node, "node id 1..127, or 0 for all nodes")->required()->check(CLI::Range(0, 127));
+  s.nmt->add_option("command", o.nmt_what)
+      ->required()
+      ->check(CLI::IsMember({"start", "stop", "preop", "reset-node", "reset-comm"}));
+  s.nmt->add_option("--node", o.node, "node id 1..127, or 0 for all nodes")
+      ->required()
+      ->check(CLI::Range(0, 127));
 
   s.read = app.add_subcommand("read", "read an object over SDO: read NODE INDEX[:SUB]");
   s.read->add_option("node", o.node)->required()->check(CLI::Range(1, 127));
@@ -226,7 +241,8 @@ void add_axis_commands(CLI::App& app, Options& o) {
   add_axis_command("home", "axis: Find Home up|down (%Q4/%Q5), with live progress");
   add_axis_command("move", "axis: move abs|rel POSITION (%Q9/%Q8), with live progress");
   add_axis_command("jog", "axis: jog up|down for --seconds (level-sensitive %Q6/%Q7)")
-      ->add_option("--seconds", o.jog_seconds, "how long the jog bit stays on")->capture_default_str();
+      ->add_option("--seconds", o.jog_seconds, "how long the jog bit stays on")
+      ->capture_default_str();
   add_axis_command("stop", "axis: Decelerate and Stop (%Q15)");
   add_axis_command("estop", "axis: Immediate Stop (%Q16)");
   add_axis_command("status", "axis: status bits in words, motor and encoder position");
@@ -234,15 +250,21 @@ void add_axis_commands(CLI::App& app, Options& o) {
 
 // HP 44714A words: stepctl hp "PROFILE FREQ 100 800 200 25E-6; MOVE 20" --node 5 --axis 0
 CLI::App* add_hp_command(CLI::App& app, Options& o) {
-  auto* hp = app.add_subcommand("hp", "HP 44714A commands in the manual's words, ';' between commands; "
-                                      "queries (POS?, DONE?, QPOS?, ERR?) print the answer");
-  hp->add_option("words", o.hp_words, "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"");
+  auto* hp = app.add_subcommand("hp",
+                                "HP 44714A commands in the manual's words, ';' between commands; "
+                                "queries (POS?, DONE?, QPOS?, ERR?) print the answer");
+  hp->add_option("words", o.hp_words,
+                 "e.g. \"PROFILE FREQ 100 800 200 25E-6\", \"MOVE 20 NOWAIT\", \"POS?\"");
   hp->add_option("--program", o.hp_program,
-                 "an HP BASIC listing of the module's commands (OUTPUT 709;\"...\", PAUSE, END; USE, WAIT, RST, "
+                 "an HP BASIC listing of the module's commands (OUTPUT 709;\"...\", PAUSE, END; "
+                 "USE, WAIT, RST, "
                  "ON INTR CALL, SUB/SUBEND, BEEP in the strings), run in line-number order");
   hp->add_option("--node", o.node, "node id 1..127")->required()->check(CLI::Range(1, 127));
-  hp->add_option("--axis", o.hp_channel, "HP channel: 0 = the node's axis 1")->capture_default_str()->check(CLI::Range(0, 7));
-  hp->add_option("--wait", o.hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")->capture_default_str();
+  hp->add_option("--axis", o.hp_channel, "HP channel: 0 = the node's axis 1")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 7));
+  hp->add_option("--wait", o.hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")
+      ->capture_default_str();
   return hp;
 }
 
@@ -276,10 +298,12 @@ int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
     if (o.hp_words.empty() == o.hp_program.empty())
       throw std::invalid_argument("hp: give either the words or --program FILE");
     if (o.hp_program.empty()) plan_hp_words(o.hp_words, static_cast<unsigned>(o.hp_channel));
-    else check_hp_program(listing = read_listing(o.hp_program), static_cast<unsigned>(o.hp_channel));
+    else
+      check_hp_program(listing = read_listing(o.hp_program), static_cast<unsigned>(o.hp_channel));
   }
   std::optional<SdoCobIds> channel;
-  if (!o.sdo_cob_ids.empty()) channel = parse_sdo_cob_ids(o.sdo_cob_ids);  // bad: exit 2 before the bus
+  if (!o.sdo_cob_ids.empty())
+    channel = parse_sdo_cob_ids(o.sdo_cob_ids);  // bad: exit 2 before the bus
   MasterBus bus(o.iface);
   bus.set_sdo_timeout_ms(o.timeout_ms);
   if (channel) bus.set_sdo_cob_ids(*channel);
@@ -289,14 +313,17 @@ int run_subcommand(CLI::App& app, const Options& o, const Subcommands& s) {
   if (*s.dump) return cmd_dump(bus, catalog, o.node);
   if (*s.hp && !listing.empty())
     return run_hp_program(bus, o.node, static_cast<unsigned>(o.hp_channel), listing, o.hp_wait_s);
-  if (*s.hp) return run_hp_command(bus, o.node, static_cast<unsigned>(o.hp_channel), o.hp_words, o.hp_wait_s);
+  if (*s.hp)
+    return run_hp_command(bus, o.node, static_cast<unsigned>(o.hp_channel), o.hp_words,
+                          o.hp_wait_s);
   if (*s.drive) return as_failure([&] { return run_drive_command(bus, catalog, o.drive_args); });
   if (*s.lss) return as_failure([&] { return run_lss_command(bus, o.lss_args, o.timeout_ms); });
   for (const char* verb : kAxisVerbs) {
     if (!*app.get_subcommand(verb)) continue;
     std::vector<std::string> words{verb};
     words.insert(words.end(), o.axis_words.begin(), o.axis_words.end());
-    return as_failure([&] { return run_axis_command(bus, o.node, o.axis, words, o.jog_seconds, o.quiet); });
+    return as_failure(
+        [&] { return run_axis_command(bus, o.node, o.axis, words, o.jog_seconds, o.quiet); });
   }
   return 0;
 }
@@ -310,7 +337,8 @@ int stepctl(int argc, char** argv) {
   add_object_commands(app, options, subcommands);
   add_axis_commands(app, options);
   subcommands.hp = add_hp_command(app, options);
-  // CiA 402: stepctl drive status|enable|disable|quick-stop|fault-reset|pp|pv|home --node N --axis A
+  // CiA 402: stepctl drive status|enable|disable|quick-stop|fault-reset|pp|pv|home --node N --axis
+  // A
   subcommands.drive = add_drive_command(app, options.drive_args);
   // CiA 305: stepctl lss switch|configure|activate-bit-timing|store|inquire|fast-scan
   subcommands.lss = add_lss_command(app, options.lss_args);

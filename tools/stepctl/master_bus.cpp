@@ -34,7 +34,8 @@ uint64_t monotonic_us() {
 SdoCobIds parse_sdo_cob_ids(const std::string& text) {
   const size_t comma = text.find(',');
   if (comma == std::string::npos)
-    throw std::invalid_argument("--sdo-cob-ids: '" + text + "': give CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 0x695,0x6D5)");
+    throw std::invalid_argument("--sdo-cob-ids: '" + text +
+                                "': give CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 0x695,0x6D5)");
   SdoCobIds ids{parse_cob_id(text.substr(0, comma)), parse_cob_id(text.substr(comma + 1))};
   if (ids.client_to_server == ids.server_to_client)
     throw std::invalid_argument("--sdo-cob-ids: the two COB-IDs must differ");
@@ -63,7 +64,8 @@ std::optional<canio::ReceivedFrame> MasterBus::receive(int timeout_ms) {
 // request COB-ID (the socket does not hand us our own frames), or answers to them.
 template <class Start>
 od::SdoResult MasterBus::run(uint8_t node, Start start, bool& disturbed) {
-  const SdoCobIds ids = cob_ids_.value_or(SdoCobIds{od::cob::kSdoRx + node, od::cob::kSdoTx + node});
+  const SdoCobIds ids =
+      cob_ids_.value_or(SdoCobIds{od::cob::kSdoRx + node, od::cob::kSdoTx + node});
   od::SdoClient client(ids.client_to_server, ids.server_to_client);
   client.set_timeout_us(static_cast<uint64_t>(sdo_timeout_ms_) * 1000);
   // Frames that queued up before this transfer are not its answers (and a socket left
@@ -89,26 +91,34 @@ od::SdoResult MasterBus::run(uint8_t node, Start start, bool& disturbed) {
   return r;
 }
 
-od::SdoResult MasterBus::upload(uint8_t node, uint16_t index, uint8_t sub, od::SdoClient::Mode mode) {
+od::SdoResult MasterBus::upload(uint8_t node, uint16_t index, uint8_t sub,
+                                od::SdoClient::Mode mode) {
   for (int attempt = 1;; ++attempt) {
     bool disturbed = false;
-    od::SdoResult r = run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
-      c.start_upload(index, sub, mode, monotonic_us(), out);
-    }, disturbed);
+    od::SdoResult r = run(
+        node,
+        [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
+          c.start_upload(index, sub, mode, monotonic_us(), out);
+        },
+        disturbed);
     if (!disturbed) return r;
     if (attempt == kReadAttempts) throw SdoChannelBusy(node);
     // A read changes nothing, so it may go again; a pause that differs per attempt keeps
     // two clients from meeting again in step.
-    std::this_thread::sleep_for(std::chrono::milliseconds(uint64_t{20} * attempt + monotonic_us() % 30));
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(uint64_t{20} * attempt + monotonic_us() % 30));
   }
 }
 
 od::SdoResult MasterBus::download(uint8_t node, uint16_t index, uint8_t sub, od::Bytes data,
                                   od::SdoClient::Mode mode) {
   bool disturbed = false;
-  od::SdoResult r = run(node, [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
-    c.start_download(index, sub, std::move(data), mode, monotonic_us(), out);
-  }, disturbed);
+  od::SdoResult r = run(
+      node,
+      [&](od::SdoClient& c, std::vector<od::CanFrame>& out) {
+        c.start_download(index, sub, std::move(data), mode, monotonic_us(), out);
+      },
+      disturbed);
   if (disturbed) throw SdoChannelBusy(node);
   return r;
 }

@@ -15,7 +15,8 @@ ObjectCatalog::ObjectCatalog(const std::string& eds_path) {
   if (eds_path.empty()) {
     od::Dictionary dictionary;
     // Every object a stepnode can have: all profiles, the most axes.
-    node::build_device_objects(dictionary, od::DeviceInfo{}, node::DeviceLayout{.axes = node::kMaxAxes});
+    node::build_device_objects(dictionary, od::DeviceInfo{},
+                               node::DeviceLayout{.axes = node::kMaxAxes});
     for (const auto& [index, obj] : dictionary.objects())
       for (const auto& [sub, e] : obj.entries) {
         std::string name = obj.code == od::ObjectCode::Var ? obj.name : obj.name + " / " + e.name;
@@ -29,7 +30,8 @@ ObjectCatalog::ObjectCatalog(const std::string& eds_path) {
   std::stringstream text;
   text << in.rdbuf();
   od::EdsFile eds = od::parse_eds(text.str());
-  for (const auto& [key, e] : eds.entries) entries_.push_back({e.index, e.sub, e.name, e.type, e.access});
+  for (const auto& [key, e] : eds.entries)
+    entries_.push_back({e.index, e.sub, e.name, e.type, e.access});
   source_ = eds_path;
 }
 
@@ -50,7 +52,8 @@ std::pair<uint16_t, uint8_t> parse_object_address(const std::string& text) {
       used = 0;
     }
     if (s.empty() || used != s.size() || v > max)
-      throw std::invalid_argument("object '" + text + "' is not INDEX[:SUB] in hex (e.g. 0x1017 or 1016:1)");
+      throw std::invalid_argument("object '" + text +
+                                  "' is not INDEX[:SUB] in hex (e.g. 0x1017 or 1016:1)");
     return v;
   };
   std::string index = text, sub = "0";
@@ -58,7 +61,9 @@ std::pair<uint16_t, uint8_t> parse_object_address(const std::string& text) {
     index = text.substr(0, colon);
     sub = text.substr(colon + 1);
   }
-  auto strip = [](const std::string& s) { return s.rfind("0x", 0) == 0 || s.rfind("0X", 0) == 0 ? s.substr(2) : s; };
+  auto strip = [](const std::string& s) {
+    return s.rfind("0x", 0) == 0 || s.rfind("0X", 0) == 0 ? s.substr(2) : s;
+  };
   return {static_cast<uint16_t>(number(strip(index), 0xFFFF)),
           static_cast<uint8_t>(number(strip(sub), 0xFF))};
 }

@@ -82,8 +82,8 @@ int run_watch(const std::string& iface, const ObjectCatalog& catalog, bool passi
         if (index >= 0x1400 && index <= 0x1BFF) v.mapping_known = false;
       }
     }
-    std::printf("%10.3f  %03X [%u] %-23s  %s\n", static_cast<double>(now - start) / 1e6, f.id, f.dlc,
-                hex_bytes(f.data.data(), f.dlc).c_str(), decoder.describe(f).c_str());
+    std::printf("%10.3f  %03X [%u] %-23s  %s\n", static_cast<double>(now - start) / 1e6, f.id,
+                f.dlc, hex_bytes(f.data.data(), f.dlc).c_str(), decoder.describe(f).c_str());
     std::fflush(stdout);
     if (!sdo || f.id <= 0x700 || f.id >= 0x780 || f.dlc != 1) continue;
     uint8_t node = static_cast<uint8_t>(f.id - 0x700);

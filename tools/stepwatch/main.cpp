@@ -1,6 +1,7 @@
 // stepwatch: a supervisor-side subscriber to stepbridge's DDS topics.
 //
-//   stepwatch [--domain N] [--ros2 [--ros2-prefix P]] [--profiles FILE.xml] [--security-config FILE.toml]
+//   stepwatch [--domain N] [--ros2 [--ros2-prefix P]] [--profiles FILE.xml] [--security-config
+//   FILE.toml]
 //             [--once [--wait-ms MS]] [--json] [--csv FILE] [--count N] [--duration-ms MS]
 //
 // Live (default): a table of every node and axis, redrawn every --interval-ms; with
@@ -9,13 +10,13 @@
 // health of every node and axis), prints it (table, or --json one line per node and
 // axis) and exits: 0 with data, 1 with none. --csv FILE logs every sample in either mode.
 // Readers are polled with take() from this one thread: no listeners, no locks.
+#include <spdlog/spdlog.h>
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <array>
@@ -37,8 +38,8 @@
 
 using namespace stepnode;
 namespace efd = eprosima::fastdds::dds;
-using eprosima::fastrtps::types::ReturnCode_t;
 using bridge::dds::TopicKind;
+using eprosima::fastrtps::types::ReturnCode_t;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -80,7 +81,8 @@ class Watcher {
     participant_ = bridge::dds::create_participant(p);
     subscriber_ = participant_->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
     if (!subscriber_) throw std::runtime_error("Fast DDS could not create a subscriber");
-    const std::array<int32_t, bridge::dds::kTopicCount> depth{64, 16, 8, 32, 64};  // status, position, health, emergency, drive
+    const std::array<int32_t, bridge::dds::kTopicCount> depth{
+        64, 16, 8, 32, 64};  // status, position, health, emergency, drive
     for (TopicKind kind : bridge::dds::kAllTopics) {
       size_t i = static_cast<size_t>(kind);
       std::string type = bridge::dds::type_name(kind, naming_);
@@ -89,12 +91,15 @@ class Watcher {
       auto* topic = participant_->create_topic(name, type, efd::TOPIC_QOS_DEFAULT);
       if (!topic) throw std::runtime_error("topic " + name + ": Fast DDS could not create it");
       readers_[i] = subscriber_->create_datareader(
-          topic, bridge::dds::reader_qos(kind, naming_.ros2, *subscriber_, naming_.ros2 ? 0 : depth[i]));
+          topic,
+          bridge::dds::reader_qos(kind, naming_.ros2, *subscriber_, naming_.ros2 ? 0 : depth[i]));
       // With DDS Security the usual cause is the permissions: no subscribe grant for the topic.
       if (!readers_[i] && o.security.enabled())
-        throw std::invalid_argument("topic " + name + ": Fast DDS refused the reader (does dds.security.permissions " +
-                                    o.security.permissions + " grant this identity subscribe?)");
-      if (!readers_[i]) throw std::runtime_error("topic " + name + ": Fast DDS refused the reader QoS");
+        throw std::invalid_argument(
+            "topic " + name + ": Fast DDS refused the reader (does dds.security.permissions " +
+            o.security.permissions + " grant this identity subscribe?)");
+      if (!readers_[i])
+        throw std::runtime_error("topic " + name + ": Fast DDS refused the reader QoS");
     }
     if (!o.csv.empty()) {
       csv_.open(o.csv, std::ios::out | std::ios::trunc);
@@ -168,7 +173,8 @@ class Watcher {
         // In ROS 2 mode the topics are unkeyed: one instance holds every axis, and its end
         // (the bridge left) says nothing about the last axis seen. Keyed: that axis is gone.
         if (naming_.ros2) continue;
-        if (kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition || kind == TopicKind::DriveStatus)
+        if (kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition ||
+            kind == TopicKind::DriveStatus)
           model_.on_axis_disposed(node, axis);
         emit(now, "disposed", {{"topic", topic}, {"node", node}, {"axis", axis}},
              stepwatch::csv_disposed_row(now, topic, node, axis));
@@ -182,7 +188,8 @@ class Watcher {
     if (!options_.once && options_.json) {
       j["type"] = type;
       j["recv_time_ns"] = now;
-      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n' << std::flush;
+      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n'
+                << std::flush;
     }
   }
 
@@ -200,7 +207,8 @@ class Watcher {
 void print_snapshot(const stepwatch::WatchModel& model, bool json) {
   if (json) {
     for (const auto& j : model.snapshot())
-      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';  // names from other publishers may not be UTF-8
+      std::cout << j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+                << '\n';  // names from other publishers may not be UTF-8
   } else {
     std::cout << model.table();
   }
@@ -223,7 +231,8 @@ int run_once(Watcher& w, const Options& o) {
   }
   w.poll();
   if (w.model().empty()) {
-    std::fprintf(stderr, "stepwatch: no samples on DDS domain %u within %u ms (%s)\n", o.domain, o.wait_ms,
+    std::fprintf(stderr, "stepwatch: no samples on DDS domain %u within %u ms (%s)\n", o.domain,
+                 o.wait_ms,
                  matched_seen ? "a bridge matched but published nothing" : "no bridge found");
     return 1;
   }
@@ -254,14 +263,17 @@ int run_live(Watcher& w, const Options& o) {
 
 Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   Options o;
-  CLI::App app{"stepwatch: shows stepbridge's DDS topics (axis status and position, node health, EMCY)"};
+  CLI::App app{
+      "stepwatch: shows stepbridge's DDS topics (axis status and position, node health, EMCY)"};
   app.add_option("--domain", o.domain, "DDS domain id 0..232 (default 0)");
-  app.add_flag("--ros2", o.ros2, "ROS 2 names (rt/<prefix>/axis_status, stepnode::msg::dds_::AxisStatus_)");
+  app.add_flag("--ros2", o.ros2,
+               "ROS 2 names (rt/<prefix>/axis_status, stepnode::msg::dds_::AxisStatus_)");
   app.add_option("--ros2-prefix", o.ros2_prefix, "topic prefix in ROS 2 mode (default stepnode)");
   app.add_option("--profiles", o.profiles, "Fast DDS XML profiles file");
   std::string security_config;
   app.add_option("--security-config", security_config,
-                 "TOML file with a [dds.security] table (DDS Security, as stepbridge's config; other keys ignored)");
+                 "TOML file with a [dds.security] table (DDS Security, as stepbridge's config; "
+                 "other keys ignored)");
   app.add_flag("--once", o.once, "print the current status of every node and axis and exit");
   app.add_option("--wait-ms", o.wait_ms, "--once: how long to wait for the bridge (default 3000)");
   app.add_flag("--json", o.json, "JSON lines: per node and axis (--once) or per sample (live)");
@@ -280,7 +292,8 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   } catch (const CLI::ParseError& e) {
     throw UsageError(e.what());
   }
-  if (o.domain > bridge::dds::kMaxDomain) throw UsageError("domain " + std::to_string(o.domain) + ": must be 0..232");
+  if (o.domain > bridge::dds::kMaxDomain)
+    throw UsageError("domain " + std::to_string(o.domain) + ": must be 0..232");
   if (app.count("--ros2-prefix") && !o.ros2) throw UsageError("--ros2-prefix needs --ros2");
   if (app.count("--wait-ms") && !o.once) throw UsageError("--wait-ms needs --once");
   if (o.once && (app.count("--count") || app.count("--duration-ms")))
@@ -292,10 +305,12 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   // The bridge's own table and loader: a supervisor's file names the same six keys.
   if (!security_config.empty()) {
     o.security = bridge::dds::load_security_table(config::TomlFile(security_config));
-    if (!o.security.enabled()) throw UsageError("security config " + security_config + ": no [dds.security] table");
+    if (!o.security.enabled())
+      throw UsageError("security config " + security_config + ": no [dds.security] table");
   }
   auto level = spdlog::level::from_str(o.log_level);
-  if (level == spdlog::level::off && o.log_level != "off") throw UsageError("log level \"" + o.log_level + "\": unknown");
+  if (level == spdlog::level::off && o.log_level != "off")
+    throw UsageError("log level \"" + o.log_level + "\": unknown");
   return o;
 }
 

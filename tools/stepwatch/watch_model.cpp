@@ -24,10 +24,12 @@ struct Row {
   Row(uint64_t recv_time, std::string topic_name) : recv(recv_time), topic(std::move(topic_name)) {}
   uint64_t recv = 0;
   std::string topic;
-  std::string node, axis, status_bits, motor, encoder, velocity, phase, sync, state, code, text, can_time, publish_time;
+  std::string node, axis, status_bits, motor, encoder, velocity, phase, sync, state, code, text,
+      can_time, publish_time;
   std::string str() const {
-    return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", recv, topic, node, axis, status_bits, motor,
-                       encoder, velocity, phase, sync, state, code, text, can_time, publish_time);
+    return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", recv, topic, node, axis,
+                       status_bits, motor, encoder, velocity, phase, sync, state, code, text,
+                       can_time, publish_time);
   }
 };
 
@@ -123,8 +125,12 @@ nlohmann::json to_json(const ::stepnode::NodeHealth& h) {
 
 nlohmann::json to_json(const ::stepnode::Emergency& e) {
   std::vector<int> manufacturer(e.manufacturer().begin(), e.manufacturer().end());
-  return {{"node", e.node()},       {"code", e.code()}, {"error_register", e.error_register()},
-          {"manufacturer", manufacturer}, {"text", e.text()}, {"can_time_ns", e.can_time_ns()}};
+  return {{"node", e.node()},
+          {"code", e.code()},
+          {"error_register", e.error_register()},
+          {"manufacturer", manufacturer},
+          {"text", e.text()},
+          {"can_time_ns", e.can_time_ns()}};
 }
 
 namespace {
@@ -145,7 +151,8 @@ std::string mode_text(int8_t mode) {
 }  // namespace
 
 std::string drive_words(const ::stepnode::DriveStatus& d) {
-  std::string out = std::string(bridge::dds::drive_state_text(d.state())) + ", " + mode_text(d.mode_display());
+  std::string out =
+      std::string(bridge::dds::drive_state_text(d.state())) + ", " + mode_text(d.mode_display());
   auto add = [&](bool on, const char* word) {
     if (on) out += std::string(" ") + word;
   };
@@ -241,17 +248,17 @@ std::vector<nlohmann::json> WatchModel::snapshot() const {
 }
 
 std::string WatchModel::table() const {
-  std::string out = fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "node", "axis", "position",
-                                "encoder", "velocity", "phase", "errors", "status");
+  std::string out = fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "node", "axis",
+                                "position", "encoder", "velocity", "phase", "errors", "status");
   std::map<uint8_t, bool> shown;
   auto node_line = [&](uint8_t node) {
     auto it = nodes_.find(node);
     if (it == nodes_.end()) return fmt::format("{:>4} {}\n", node, "(no NodeHealth yet)");
     const auto& h = it->second;
-    std::string line = fmt::format("{:>4} {} {} {} axes, heartbeat {} ms ago, frames {} (bad {}), SDO failures {}",
-                                   node, bridge::dds::state_text(h.state()),
-                                   h.device_name().empty() ? "?" : h.device_name(), h.axes(), h.heartbeat_age_ms(),
-                                   h.frames(), h.bad_frames(), h.sdo_failures());
+    std::string line = fmt::format(
+        "{:>4} {} {} {} axes, heartbeat {} ms ago, frames {} (bad {}), SDO failures {}", node,
+        bridge::dds::state_text(h.state()), h.device_name().empty() ? "?" : h.device_name(),
+        h.axes(), h.heartbeat_age_ms(), h.frames(), h.bad_frames(), h.sdo_failures());
     auto emcy = last_emcy_.find(node);
     if (emcy != last_emcy_.end())
       line += fmt::format(", last EMCY {:04X} {}", emcy->second.code(), emcy->second.text());
@@ -274,14 +281,12 @@ std::string WatchModel::table() const {
         pos = std::to_string(row.drive->position_actual());
         vel = std::to_string(row.drive->velocity_actual());
       }
-      if (row.status)
-        words += " | ";
-      else
-        words.clear();
+      if (row.status) words += " | ";
+      else words.clear();
       words.append("402: ").append(drive_words(*row.drive));
     }
-    out += fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "", row.axis, pos, enc, vel, phase,
-                       errors, words);
+    out += fmt::format("{:>4} {:>4} {:>12} {:>12} {:>9} {:>5} {:>6}  {}\n", "", row.axis, pos, enc,
+                       vel, phase, errors, words);
   }
   for (const auto& [id, h] : nodes_)
     if (!shown[id]) out += node_line(id);
@@ -289,7 +294,8 @@ std::string WatchModel::table() const {
 }
 
 std::string csv_header() {
-  return "recv_time_ns,topic,node,axis,status_bits,motor_position,encoder_position,velocity,motion_phase,"
+  return "recv_time_ns,topic,node,axis,status_bits,motor_position,encoder_position,velocity,motion_"
+         "phase,"
          "sync_counter,state,code,text,can_time_ns,publish_time_ns\n";
 }
 

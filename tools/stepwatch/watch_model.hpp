@@ -1,6 +1,7 @@
 // stepwatch's view of the bridge's topics: the latest status and position of every axis
 // (and its CiA 402 drive status), the health of every node, the last EMCY of each node;
-// rendered as a table, JSON lines or CSV rows. Pure (no DDS entities), so it is tested without a participant.
+// rendered as a table, JSON lines or CSV rows. Pure (no DDS entities), so it is tested without a
+// participant.
 #pragma once
 #include <stepnodePubSubTypes.h>
 

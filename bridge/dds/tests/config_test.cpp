@@ -48,7 +48,8 @@ TEST(BridgeConfig, Defaults) {
 }
 
 TEST(BridgeConfig, Options) {
-  auto cfg = parse({"--iface", "can1", "--domain", "42", "--ros2", "--ros2-prefix", "line/a", "--log-level", "debug"});
+  auto cfg = parse({"--iface", "can1", "--domain", "42", "--ros2", "--ros2-prefix", "line/a",
+                    "--log-level", "debug"});
   EXPECT_EQ(cfg.iface, "can1");
   EXPECT_EQ(cfg.domain, 42u);
   EXPECT_TRUE(cfg.ros2);
@@ -57,9 +58,10 @@ TEST(BridgeConfig, Options) {
 }
 
 TEST(BridgeConfig, FileKeysAndTheCommandLineWins) {
-  auto file = write_file("bridge.toml",
-                         "iface = \"can0\"\ndomain = 7\nros2 = true\nros2_prefix = \"cell\"\n"
-                         "log_level = \"warn\"\ntick_ms = 5\nheartbeat_timeout_ms = 2500\nsdo_timeout_ms = 800\n");
+  auto file = write_file(
+      "bridge.toml",
+      "iface = \"can0\"\ndomain = 7\nros2 = true\nros2_prefix = \"cell\"\n"
+      "log_level = \"warn\"\ntick_ms = 5\nheartbeat_timeout_ms = 2500\nsdo_timeout_ms = 800\n");
   auto cfg = parse({"--config", file, "--domain", "9"});
   EXPECT_EQ(cfg.iface, "can0");
   EXPECT_EQ(cfg.domain, 9u);
@@ -76,24 +78,28 @@ TEST(BridgeConfig, BadInputIsOneLineNamingTheProblem) {
   EXPECT_EQ(error_of({}), "no CAN interface: give --iface IFACE (or iface in the config file)");
   EXPECT_EQ(error_of({"--iface", "vcan0", "--domain", "233"}), "domain 233: must be 0..232");
   EXPECT_EQ(error_of({"--iface", "vcan0", "--ros2-prefix", "x"}), "--ros2-prefix needs --ros2");
-  EXPECT_EQ(error_of({"--iface", "vcan0", "--profiles", "/nonexistent.xml"}), "profiles /nonexistent.xml: cannot read file");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--profiles", "/nonexistent.xml"}),
+            "profiles /nonexistent.xml: cannot read file");
   EXPECT_EQ(error_of({"--iface", "vcan0", "--log-level", "loud"}),
             "log level \"loud\": must be trace, debug, info, warn, error, critical or off");
   EXPECT_NE(error_of({"--iface", "vcan0", "--bogus"}), "");
-  EXPECT_EQ(error_of({"--config", "/nonexistent.toml"}), "config /nonexistent.toml: cannot read file");
+  EXPECT_EQ(error_of({"--config", "/nonexistent.toml"}),
+            "config /nonexistent.toml: cannot read file");
   auto file = write_file("bad.toml", "iface = \"can0\"\ndomain = \"one\"\n");
   EXPECT_EQ(error_of({"--config", file}), "config " + file + ": domain: must be an integer 0..232");
   auto unknown = write_file("unknown.toml", "iface = \"can0\"\nnode_id = 3\n");
   EXPECT_EQ(error_of({"--config", unknown}), "config " + unknown + ": node_id: unknown key");
   auto zero = write_file("zero.toml", "iface = \"can0\"\nsdo_timeout_ms = 0\n");
-  EXPECT_EQ(error_of({"--config", zero}), "config " + zero + ": sdo_timeout_ms: must be an integer 10..60000");
+  EXPECT_EQ(error_of({"--config", zero}),
+            "config " + zero + ": sdo_timeout_ms: must be an integer 10..60000");
   std::filesystem::remove(file);
   std::filesystem::remove(unknown);
   std::filesystem::remove(zero);
 }
 
 TEST(BridgeConfig, SdoChannelsFromTheCommandLineAndTheFile) {
-  auto cfg = parse({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x6C5", "--sdo-channel", "6:0x686,1734"});
+  auto cfg = parse(
+      {"--iface", "vcan0", "--sdo-channel", "5:0x685,0x6C5", "--sdo-channel", "6:0x686,1734"});
   ASSERT_EQ(cfg.sdo_channels.size(), 2u);
   EXPECT_EQ(cfg.sdo_channels[0].node, 5);
   EXPECT_EQ(cfg.sdo_channels[0].client_to_server, 0x685u);
@@ -112,7 +118,8 @@ TEST(BridgeConfig, SdoChannelsFromTheCommandLineAndTheFile) {
 TEST(BridgeConfig, BadSdoChannelsAreOneLine) {
   EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5"}),
             "--sdo-channel 5: give NODE:CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 5:0x685,0x6C5)");
-  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "0:0x685,0x6C5"}), "--sdo-channel 0:0x685,0x6C5: node must be 1..127");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "0:0x685,0x6C5"}),
+            "--sdo-channel 0:0x685,0x6C5: node must be 1..127");
   EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x800"}),
             "--sdo-channel 5:0x685,0x800: '0x800' is not an 11-bit CAN-ID (1..0x7FF)");
   EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x685"}),

@@ -14,19 +14,28 @@ TEST(Convert, EveryStatusBitByName) {
     bool (::stepnode::AxisStatus::*get)() const;
   };
   const Bit bits[] = {
-      {1u << 0, &::stepnode::AxisStatus::emergency_stop}, {1u << 1, &::stepnode::AxisStatus::lower_limit},
-      {1u << 2, &::stepnode::AxisStatus::upper_limit},    {1u << 3, &::stepnode::AxisStatus::illegal_move},
-      {1u << 4, &::stepnode::AxisStatus::motor_stalled},  {1u << 7, &::stepnode::AxisStatus::power_up_error},
-      {1u << 8, &::stepnode::AxisStatus::position_valid}, {1u << 9, &::stepnode::AxisStatus::resumable},
-      {1u << 10, &::stepnode::AxisStatus::axis2_selected}, {1u << 11, &::stepnode::AxisStatus::axis3_selected},
-      {1u << 12, &::stepnode::AxisStatus::at_home},       {1u << 13, &::stepnode::AxisStatus::accelerating},
-      {1u << 14, &::stepnode::AxisStatus::decelerating},  {1u << 15, &::stepnode::AxisStatus::moving},
+      {1u << 0, &::stepnode::AxisStatus::emergency_stop},
+      {1u << 1, &::stepnode::AxisStatus::lower_limit},
+      {1u << 2, &::stepnode::AxisStatus::upper_limit},
+      {1u << 3, &::stepnode::AxisStatus::illegal_move},
+      {1u << 4, &::stepnode::AxisStatus::motor_stalled},
+      {1u << 7, &::stepnode::AxisStatus::power_up_error},
+      {1u << 8, &::stepnode::AxisStatus::position_valid},
+      {1u << 9, &::stepnode::AxisStatus::resumable},
+      {1u << 10, &::stepnode::AxisStatus::axis2_selected},
+      {1u << 11, &::stepnode::AxisStatus::axis3_selected},
+      {1u << 12, &::stepnode::AxisStatus::at_home},
+      {1u << 13, &::stepnode::AxisStatus::accelerating},
+      {1u << 14, &::stepnode::AxisStatus::decelerating},
+      {1u << 15, &::stepnode::AxisStatus::moving},
   };
   for (const Bit& b : bits) {
     AxisStatusSample s;
     s.status_bits = b.mask;
     auto one = to_idl(s);
-    for (const Bit& other : bits) EXPECT_EQ((one.*other.get)(), other.mask == b.mask) << std::hex << b.mask << " vs " << other.mask;
+    for (const Bit& other : bits)
+      EXPECT_EQ((one.*other.get)(), other.mask == b.mask)
+          << std::hex << b.mask << " vs " << other.mask;
     EXPECT_EQ(one.status_bits(), b.mask);
   }
 }
@@ -220,18 +229,28 @@ TEST(Convert, EveryDriveStatuswordBitByName) {
   };
   using D = ::stepnode::DriveStatus;
   const Bit bits[] = {
-      {1u << 0, &D::ready_to_switch_on}, {1u << 1, &D::switched_on},     {1u << 2, &D::operation_enabled},
-      {1u << 3, &D::fault},              {1u << 4, &D::voltage_enabled}, {1u << 5, &D::quick_stop},
-      {1u << 6, &D::switch_on_disabled}, {1u << 7, &D::warning},         {1u << 9, &D::remote},
-      {1u << 10, &D::target_reached},    {1u << 11, &D::internal_limit_active},
-      {1u << 12, &D::bit12},             {1u << 13, &D::bit13},
+      {1u << 0, &D::ready_to_switch_on},
+      {1u << 1, &D::switched_on},
+      {1u << 2, &D::operation_enabled},
+      {1u << 3, &D::fault},
+      {1u << 4, &D::voltage_enabled},
+      {1u << 5, &D::quick_stop},
+      {1u << 6, &D::switch_on_disabled},
+      {1u << 7, &D::warning},
+      {1u << 9, &D::remote},
+      {1u << 10, &D::target_reached},
+      {1u << 11, &D::internal_limit_active},
+      {1u << 12, &D::bit12},
+      {1u << 13, &D::bit13},
   };
   for (const Bit& b : bits) {
     DriveStatusSample s;
     s.statusword_known = true;
     s.statusword = b.mask;
     auto one = to_idl(s);
-    for (const Bit& other : bits) EXPECT_EQ((one.*other.get)(), other.mask == b.mask) << std::hex << b.mask << " vs " << other.mask;
+    for (const Bit& other : bits)
+      EXPECT_EQ((one.*other.get)(), other.mask == b.mask)
+          << std::hex << b.mask << " vs " << other.mask;
   }
 }
 

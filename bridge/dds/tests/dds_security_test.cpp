@@ -2,15 +2,15 @@
 // the stepbridge identity of tools/dds-security-certs, and subscriber participants that
 // should and should not get its samples. Intra-process delivery is switched off so every
 // sample goes through the transports (and their encryption) as between processes.
+#include <fastrtps/xmlparser/XMLProfileManager.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <fastrtps/xmlparser/XMLProfileManager.h>
-#include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <memory>
@@ -53,10 +53,12 @@ class StatusReader {
     const Naming naming;
     const std::string type = type_name(TopicKind::AxisStatus, naming);
     make_type_support(TopicKind::AxisStatus, naming).register_type(participant_, type);
-    auto* topic = participant_->create_topic(topic_name(TopicKind::AxisStatus, naming), type, efd::TOPIC_QOS_DEFAULT);
+    auto* topic = participant_->create_topic(topic_name(TopicKind::AxisStatus, naming), type,
+                                             efd::TOPIC_QOS_DEFAULT);
     auto* subscriber = participant_->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
     if (topic && subscriber)
-      reader_ = subscriber->create_datareader(topic, builtin_reader_qos(TopicKind::AxisStatus, false, 16));
+      reader_ = subscriber->create_datareader(topic,
+                                              builtin_reader_qos(TopicKind::AxisStatus, false, 16));
   }
   ~StatusReader() { delete_participant(participant_); }
 
@@ -96,7 +98,8 @@ efd::DomainParticipantQos authenticated_only_qos(const SecurityFiles& files) {
   auto& p = qos.properties().properties();
   p.emplace_back("dds.sec.auth.plugin", "builtin.PKI-DH");
   p.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_ca", "file://" + files.identity_ca);
-  p.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate", "file://" + files.identity_certificate);
+  p.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_certificate",
+                 "file://" + files.identity_certificate);
   p.emplace_back("dds.sec.auth.builtin.PKI-DH.private_key", "file://" + files.private_key);
   return qos;
 }
@@ -118,14 +121,17 @@ TEST(DdsSecurity, OnlyThePermittedSupervisorReadsTheBridge) {
   DdsPublisher publisher(options);
 
   StatusReader supervisor(domain, secured_qos(test::security_of("supervisor")));
-  StatusReader plain(domain, efd::PARTICIPANT_QOS_DEFAULT);                          // no security at all
-  StatusReader rogue(domain, secured_qos(test::security_of("intruder")));            // permissions of a rogue CA
-  StatusReader auth_only(domain, authenticated_only_qos(test::security_of("intruder")));  // no permissions
+  StatusReader plain(domain, efd::PARTICIPANT_QOS_DEFAULT);  // no security at all
+  StatusReader rogue(domain,
+                     secured_qos(test::security_of("intruder")));  // permissions of a rogue CA
+  StatusReader auth_only(domain,
+                         authenticated_only_qos(test::security_of("intruder")));  // no permissions
   ASSERT_NE(supervisor.reader(), nullptr);
   // Each of the others has a reader of its own, so "nothing" below is the bridge's refusal,
   // not a reader that was never there.
   ASSERT_NE(plain.reader(), nullptr);
-  ASSERT_NE(rogue.reader(), nullptr) << "the rogue CA's grant lets the intruder create its reader locally";
+  ASSERT_NE(rogue.reader(), nullptr)
+      << "the rogue CA's grant lets the intruder create its reader locally";
   ASSERT_NE(auth_only.reader(), nullptr);
 
   // Samples keep coming (TRANSIENT_LOCAL also gives a late match the last one).
@@ -140,7 +146,8 @@ TEST(DdsSecurity, OnlyThePermittedSupervisorReadsTheBridge) {
   EXPECT_EQ(supervisor.matched(), 1);
 
   // As long again and at least 3 s more for the others: discovery had the same chances.
-  const auto more = std::max(std::chrono::milliseconds(3000), std::chrono::milliseconds(static_cast<int>(first_ms)));
+  const auto more = std::max(std::chrono::milliseconds(3000),
+                             std::chrono::milliseconds(static_cast<int>(first_ms)));
   const auto until = Clock::now() + more;
   while (Clock::now() < until) {
     publisher.axis_status(status(bits++));
@@ -148,11 +155,14 @@ TEST(DdsSecurity, OnlyThePermittedSupervisorReadsTheBridge) {
   }
   EXPECT_EQ(plain.poll(), 0) << "a participant without security read the bridge";
   EXPECT_EQ(rogue.poll(), 0) << "a participant with permissions of another CA read the bridge";
-  EXPECT_EQ(auth_only.poll(), 0) << "an authenticated participant without permissions read the bridge";
+  EXPECT_EQ(auth_only.poll(), 0)
+      << "an authenticated participant without permissions read the bridge";
   EXPECT_EQ(plain.matched() + rogue.matched() + auth_only.matched(), 0);
-  std::printf("DDS Security: supervisor matched and had 3 samples after %.0f ms; the other three 0 samples in "
-              "another %lld ms (supervisor %d samples in all)\n",
-              first_ms, static_cast<long long>(more.count()), supervisor.poll());
+  std::printf(
+      "DDS Security: supervisor matched and had 3 samples after %.0f ms; the other three 0 samples "
+      "in "
+      "another %lld ms (supervisor %d samples in all)\n",
+      first_ms, static_cast<long long>(more.count()), supervisor.poll());
 }
 
 TEST(DdsSecurity, ACertificateTheGrantsDoNotNameCannotJoin) {
@@ -165,12 +175,15 @@ TEST(DdsSecurity, ACertificateTheGrantsDoNotNameCannotJoin) {
     delete_participant(create_participant(options));
     FAIL() << "a participant without a grant was created";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("dds.security.permissions"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("no grant for CN=intruder,O=stepnode,C=DE"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("dds.security.permissions"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("no grant for CN=intruder,O=stepnode,C=DE"),
+              std::string::npos)
+        << e.what();
   }
   // And Fast DDS refuses the same participant on its own (the check is not stricter than it).
-  EXPECT_EQ(efd::DomainParticipantFactory::get_instance()->create_participant(options.domain,
-                                                                              secured_qos(options.security)),
+  EXPECT_EQ(efd::DomainParticipantFactory::get_instance()->create_participant(
+                options.domain, secured_qos(options.security)),
             nullptr);
 }
 

@@ -1,14 +1,14 @@
 // In-process DDS: the bridge's publisher and a reader in two participants on a random
 // domain (so parallel test runs do not hear each other). Late joiner, dispose, ROS 2
 // names, the keyed/unkeyed trap, XML profiles, and (when built) a Cyclone DDS subscriber.
+#include <gtest/gtest.h>
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
-#include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -50,7 +50,8 @@ class TestReader {
     EXPECT_EQ(support.register_type(participant_, type), ReturnCode_t::RETCODE_OK);
     topic_ = participant_->create_topic(topic_name(kind, naming), type, efd::TOPIC_QOS_DEFAULT);
     subscriber_ = participant_->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
-    reader_ = subscriber_->create_datareader(topic_, builtin_reader_qos(kind, naming.ros2 && !keyed_anyway, 16));
+    reader_ = subscriber_->create_datareader(
+        topic_, builtin_reader_qos(kind, naming.ros2 && !keyed_anyway, 16));
     EXPECT_NE(reader_, nullptr);
   }
   ~TestReader() { delete_participant(participant_); }
@@ -216,7 +217,8 @@ TEST(DdsSmoke, Ros2NamesMatchAnUnkeyedReaderAndNotAKeyedOne) {
   publisher.node_health(h);
 
   // What rmw_fastrtps registers for a ROS 2 subscriber of stepnode/msg/NodeHealth on
-  // /cell4/node_health: unkeyed type "stepnode::msg::dds_::NodeHealth_", topic "rt/cell4/node_health".
+  // /cell4/node_health: unkeyed type "stepnode::msg::dds_::NodeHealth_", topic
+  // "rt/cell4/node_health".
   TestReader ros_reader(domain, TopicKind::NodeHealth, ros2);
   auto d = ros_reader.next<::stepnode::NodeHealth>(std::chrono::seconds(10));
   ASSERT_TRUE(d);
@@ -265,7 +267,8 @@ TEST(DdsQos, BuiltInTable) {
   EXPECT_EQ(drive.history().depth, 1);
   EXPECT_EQ(drive.resource_limits().max_instances, kMaxInstances);
   EXPECT_EQ(drive.data_sharing().kind(), efd::OFF);
-  EXPECT_EQ(drive.reliable_writer_qos().times.nackSupressionDuration, position.reliable_writer_qos().times.nackSupressionDuration);
+  EXPECT_EQ(drive.reliable_writer_qos().times.nackSupressionDuration,
+            position.reliable_writer_qos().times.nackSupressionDuration);
   EXPECT_LE(status.reliability().max_blocking_time.to_ns(), 1'000'000);
   // ROS 2 mode is unkeyed: one topic-wide history, deep enough for every axis.
   auto ros_status = builtin_writer_qos(TopicKind::AxisStatus, true);
@@ -335,7 +338,9 @@ TEST(DdsInterop, CycloneSubscriberReceivesStatusAndPosition) {
   writer.join();
   int rc = pclose(pipe);
   EXPECT_EQ(rc, 0) << out;
-  EXPECT_NE(out.find("AxisStatus node=6 axis=2 status_bits=0x8100 error_bits=0x00"), std::string::npos) << out;
+  EXPECT_NE(out.find("AxisStatus node=6 axis=2 status_bits=0x8100 error_bits=0x00"),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("position_valid=1"), std::string::npos) << out;
   EXPECT_NE(out.find("moving=1"), std::string::npos) << out;
   EXPECT_NE(out.find("AxisPosition node=6 axis=2 motor_position=4242"), std::string::npos) << out;

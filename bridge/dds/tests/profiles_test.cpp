@@ -1,8 +1,8 @@
 // The shipped XML profiles load in Fast DDS 2.9 and say what the built-in QoS says.
+#include <gtest/gtest.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
-#include <gtest/gtest.h>
 
 #include <random>
 #include <string>
@@ -35,12 +35,15 @@ TEST(ShippedProfiles, StepbridgeXmlEqualsTheBuiltInWriterQos) {
     EXPECT_EQ(xml.history().depth, builtin.history().depth);
     EXPECT_EQ(xml.data_sharing().kind(), efd::OFF);
     EXPECT_EQ(xml.publish_mode().kind, builtin.publish_mode().kind);
-    EXPECT_EQ(xml.reliable_writer_qos().times.heartbeatPeriod, builtin.reliable_writer_qos().times.heartbeatPeriod);
+    EXPECT_EQ(xml.reliable_writer_qos().times.heartbeatPeriod,
+              builtin.reliable_writer_qos().times.heartbeatPeriod);
     EXPECT_EQ(xml.reliable_writer_qos().times.nackSupressionDuration,
               builtin.reliable_writer_qos().times.nackSupressionDuration);
-    EXPECT_EQ(xml.resource_limits().max_samples_per_instance, builtin.resource_limits().max_samples_per_instance);
+    EXPECT_EQ(xml.resource_limits().max_samples_per_instance,
+              builtin.resource_limits().max_samples_per_instance);
     // Every axis of every node fits (NodeHealth and Emergency: one instance per node).
-    const bool per_axis = kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition || kind == TopicKind::DriveStatus;
+    const bool per_axis = kind == TopicKind::AxisStatus || kind == TopicKind::AxisPosition ||
+                          kind == TopicKind::DriveStatus;
     EXPECT_GE(xml.resource_limits().max_instances, per_axis ? kMaxInstances : 127);
   }
   delete_participant(participant);
@@ -48,14 +51,17 @@ TEST(ShippedProfiles, StepbridgeXmlEqualsTheBuiltInWriterQos) {
 
 TEST(ShippedProfiles, DiscoveryClientXmlMakesAClientOfServer0) {
   auto* factory = efd::DomainParticipantFactory::get_instance();
-  ASSERT_EQ(factory->load_XML_profiles_file(STEPNODE_SOURCE_DIR "/bridge/profiles/discovery-client.xml"),
-            ReturnCode_t::RETCODE_OK);
+  ASSERT_EQ(
+      factory->load_XML_profiles_file(STEPNODE_SOURCE_DIR "/bridge/profiles/discovery-client.xml"),
+      ReturnCode_t::RETCODE_OK);
   efd::DomainParticipantQos qos;
-  ASSERT_EQ(factory->get_participant_qos_from_profile(kParticipantProfile, qos), ReturnCode_t::RETCODE_OK);
+  ASSERT_EQ(factory->get_participant_qos_from_profile(kParticipantProfile, qos),
+            ReturnCode_t::RETCODE_OK);
   const auto& discovery = qos.wire_protocol().builtin.discovery_config;
   EXPECT_EQ(discovery.discoveryProtocol, eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT);
   ASSERT_EQ(discovery.m_DiscoveryServers.size(), 1u);
-  EXPECT_EQ(discovery.m_DiscoveryServers.front().metatrafficUnicastLocatorList.begin()->port, 11811u);
+  EXPECT_EQ(discovery.m_DiscoveryServers.front().metatrafficUnicastLocatorList.begin()->port,
+            11811u);
 }
 
 }  // namespace

@@ -17,7 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path write_file(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / ("stepnode-sec-config-" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("stepnode-sec-config-" + std::to_string(getpid()));
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;
@@ -65,29 +66,36 @@ TEST(SecurityConfig, RelativePathsAreRelativeToTheConfigFile) {
 }
 
 TEST(SecurityConfig, NoTableNoSecurity) {
-  EXPECT_FALSE(load_security_table(config::TomlFile(write_file("none.toml", "iface = \"can0\"\n").string())).enabled());
+  EXPECT_FALSE(
+      load_security_table(config::TomlFile(write_file("none.toml", "iface = \"can0\"\n").string()))
+          .enabled());
 }
 
 TEST(SecurityConfig, EveryKeyIsRequiredAndNoOtherAllowed) {
   std::string text = kTable;
   text.erase(text.find("permissions = "));
-  EXPECT_NE(load_error(text).find(": dds.security.permissions: missing"), std::string::npos) << load_error(text);
-  EXPECT_NE(load_error(std::string(kTable) + "password = \"x\"\n").find("dds.security.password: unknown key"),
+  EXPECT_NE(load_error(text).find(": dds.security.permissions: missing"), std::string::npos)
+      << load_error(text);
+  EXPECT_NE(load_error(std::string(kTable) + "password = \"x\"\n")
+                .find("dds.security.password: unknown key"),
             std::string::npos);
   EXPECT_NE(load_error("[dds]\nsecurty = 1\n").find("dds.securty: unknown key"), std::string::npos);
   EXPECT_NE(load_error("dds = 1\n").find("dds: must be a table"), std::string::npos);
-  EXPECT_NE(load_error("[dds.security]\nidentity_ca = 5\n").find("dds.security.identity_ca: must be a file path"),
+  EXPECT_NE(load_error("[dds.security]\nidentity_ca = 5\n")
+                .find("dds.security.identity_ca: must be a file path"),
             std::string::npos);
 }
 
 TEST(SecurityConfig, TheBridgeConfigCarriesTheTable) {
-  const std::string path = write_file("bridge.toml", std::string("iface = \"vcan0\"\n") + kTable).string();
+  const std::string path =
+      write_file("bridge.toml", std::string("iface = \"vcan0\"\n") + kTable).string();
   std::vector<std::string> args{"stepbridge", "--config", path};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   bool exit_now = false;
   int exit_code = 0;
-  BridgeConfig cfg = parse_bridge_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
+  BridgeConfig cfg =
+      parse_bridge_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
   EXPECT_TRUE(cfg.dds_security.enabled());
   EXPECT_EQ(cfg.dds_security.identity_certificate, "/etc/stepnode/bridge.pem");
 }
@@ -106,7 +114,8 @@ TEST(SecurityCheck, EachWrongFileIsNamed) {
 
   f = good;
   f.identity_ca = (pki / "governance.p7s").string();
-  EXPECT_EQ(check_error(f), "dds.security.identity_ca " + f.identity_ca + ": not a PEM X.509 certificate");
+  EXPECT_EQ(check_error(f),
+            "dds.security.identity_ca " + f.identity_ca + ": not a PEM X.509 certificate");
 
   f = good;  // a CA that did not sign the bridge's certificate
   f.identity_ca = (pki / "intruder/rogue_ca.pem").string();
@@ -117,19 +126,21 @@ TEST(SecurityCheck, EachWrongFileIsNamed) {
 
   f = good;  // another participant's key
   f.private_key = (pki / "supervisor/key.pem").string();
-  EXPECT_EQ(check_error(f), "dds.security.private_key " + f.private_key + ": is not the key of identity_certificate " +
+  EXPECT_EQ(check_error(f), "dds.security.private_key " + f.private_key +
+                                ": is not the key of identity_certificate " +
                                 f.identity_certificate);
 
   f = good;  // a certificate where a signed document belongs
   f.governance = (pki / "identity_ca.pem").string();
-  EXPECT_NE(check_error(f).find("dds.security.governance " + f.governance + ": not an S/MIME signed document"),
+  EXPECT_NE(check_error(f).find("dds.security.governance " + f.governance +
+                                ": not an S/MIME signed document"),
             std::string::npos)
       << check_error(f);
 
   f = good;  // a document signed by the rogue CA
   f.permissions = (pki / "intruder/permissions.p7s").string();
-  EXPECT_EQ(check_error(f), "dds.security.permissions " + f.permissions + ": signature not accepted by permissions_ca " +
-                                f.permissions_ca);
+  EXPECT_EQ(check_error(f), "dds.security.permissions " + f.permissions +
+                                ": signature not accepted by permissions_ca " + f.permissions_ca);
 }
 
 }  // namespace

@@ -13,7 +13,8 @@ namespace stepnode::bridge::test {
 namespace {
 
 FakeNodeOptions cia402_only(uint8_t id, unsigned axes) {
-  return FakeNodeOptions{.id = id, .axes = axes, .horner = false, .hp = false, .user = false, .cia402 = true};
+  return FakeNodeOptions{
+      .id = id, .axes = axes, .horner = false, .hp = false, .user = false, .cia402 = true};
 }
 
 // Requests (upload initiate) the observer sent, by index.
@@ -39,10 +40,10 @@ void set_mapping(FakeNode& node, unsigned k, uint32_t cob, std::vector<uint32_t>
 TEST(DriveState, StatuswordStateCodingAsTheStandardsTable) {
   // 6041h written from the standard's table, with bits it leaves open set as a drive may.
   EXPECT_EQ(drive_state_of(0x0000), DriveState::NotReadyToSwitchOn);
-  EXPECT_EQ(drive_state_of(0x0250), DriveState::SwitchOnDisabled);   // + voltage, remote
+  EXPECT_EQ(drive_state_of(0x0250), DriveState::SwitchOnDisabled);  // + voltage, remote
   EXPECT_EQ(drive_state_of(0x0231), DriveState::ReadyToSwitchOn);
   EXPECT_EQ(drive_state_of(0x0233), DriveState::SwitchedOn);
-  EXPECT_EQ(drive_state_of(0x0637), DriveState::OperationEnabled);   // + remote, target reached
+  EXPECT_EQ(drive_state_of(0x0637), DriveState::OperationEnabled);  // + remote, target reached
   EXPECT_EQ(drive_state_of(0x0217), DriveState::QuickStopActive);
   EXPECT_EQ(drive_state_of(0x021F), DriveState::FaultReactionActive);
   EXPECT_EQ(drive_state_of(0x0218), DriveState::Fault);
@@ -68,7 +69,8 @@ TEST(DriveState, AgreesWithTheDrivesOwnStatusword) {
     const uint16_t sw = cia402::state_bits(node_state);
     EXPECT_EQ(drive_state_of(sw), bridge_state) << cia402::name(node_state);
     // The caller's bits (warning, target reached, internal limit, 12, 13, 14, 15) change nothing.
-    EXPECT_EQ(drive_state_of(static_cast<uint16_t>(sw | 0xFD80)), bridge_state) << cia402::name(node_state);
+    EXPECT_EQ(drive_state_of(static_cast<uint16_t>(sw | 0xFD80)), bridge_state)
+        << cia402::name(node_state);
   }
 }
 
@@ -117,7 +119,8 @@ TEST_F(Cia402Only, IsDiscoveredBy67FFhWithoutHornerObjects) {
   EXPECT_EQ(d.position_actual, 1234);
   EXPECT_EQ(d.following_error, -3);
   EXPECT_EQ(bus.sink.drives[1].axis, 2);
-  EXPECT_EQ(bus.sink.drives[1].statusword, 0x0200) << "the table's value: Not ready to switch on, remote";
+  EXPECT_EQ(bus.sink.drives[1].statusword, 0x0200)
+      << "the table's value: Not ready to switch on, remote";
   EXPECT_TRUE(bus.sink.statuses.empty());
   EXPECT_TRUE(bus.sink.positions.empty());
 }
@@ -176,9 +179,9 @@ TEST_F(Cia402Only, TheNodesOwnTpdosAsItPacksThem) {
 
 TEST_F(Cia402Only, AFaultsErrorCodeIsReadWhenTheFaultComesAndGoes) {
   bus.sink.clear();
-  node.set_drive_fault(0, 0x8611, 250);  // following error
+  node.set_drive_fault(0, 0x8611, 250);               // following error
   bus.send(od::CanFrame(0x185, {0x18, 0x02, 0x01}));  // 0x0218: Fault
-  ASSERT_GE(bus.sink.drives.size(), 1u);  // (the SDO read may already be answered)
+  ASSERT_GE(bus.sink.drives.size(), 1u);              // (the SDO read may already be answered)
   EXPECT_EQ(bus.sink.drives[0].state(), DriveState::Fault);
   EXPECT_EQ(bus.sink.drives[0].error_code, 0) << "603Fh is in no TPDO: not known yet";
   bus.run_ms(20);
@@ -275,7 +278,12 @@ TEST(Cia402Mapping, HornerAndCia402OnOneDevice) {
 
 TEST(Cia402Mapping, AnotherVendorsDriveIsDecodedToo) {
   TestBus bus;
-  FakeNode drive({.id = 9, .axes = 1, .horner = false, .hp = false, .user = false, .cia402 = true,
+  FakeNode drive({.id = 9,
+                  .axes = 1,
+                  .horner = false,
+                  .hp = false,
+                  .user = false,
+                  .cia402 = true,
                   .stepnode_product_code = 0x00C0FFEE});
   bus.add(drive);
   bus.boot(drive);
@@ -284,7 +292,8 @@ TEST(Cia402Mapping, AnotherVendorsDriveIsDecodedToo) {
   ASSERT_TRUE(h.discovered);
   EXPECT_FALSE(h.is_stepnode);
   EXPECT_EQ(h.axes, 1);
-  for (uint16_t i : uploads(bus)) EXPECT_FALSE(i >= 0x2000 && i < 0x2800) << std::hex << i << ": not a stepnode";
+  for (uint16_t i : uploads(bus))
+    EXPECT_FALSE(i >= 0x2000 && i < 0x2800) << std::hex << i << ": not a stepnode";
   bus.sink.clear();
   bus.send(od::CanFrame(0x189, {0x37, 0x06, 0x01}));
   ASSERT_EQ(bus.sink.drives.size(), 1u);

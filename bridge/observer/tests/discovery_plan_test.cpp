@@ -75,7 +75,8 @@ TEST(DiscoveryPlanOrder, AStepnodeWithOneAxisAndTwoTpdos) {
   for (const SdoRead& r : reads) EXPECT_NE(r.index, 0x1A01) << "TPDO2 is invalid";
   // The probe stopped at the first missing block.
   int probes = 0;
-  for (const SdoRead& r : reads) probes += (r.index & 0xF0FF) == 0x2001 && r.index != 0x2001 ? 1 : 0;
+  for (const SdoRead& r : reads)
+    probes += (r.index & 0xF0FF) == 0x2001 && r.index != 0x2001 ? 1 : 0;
   EXPECT_EQ(probes, 1) << "0x2101 probed once and found missing";
 }
 
@@ -95,9 +96,10 @@ TEST(DiscoveryPlanOrder, ADeviceNameIsCutAtItsFirstNulAndPrintableAscii) {
   // VISIBLE_STRING is ISO 646. A third-party device's Latin-1 byte made NodeHealth carry
   // invalid UTF-8 (stepwatch --json's dump throws on it, ROS 2 readers cannot decode it)
   // and an escape byte went into stepwatch's table as is.
-  for (auto [bytes, expected] : {std::pair<od::Bytes, std::string>{{'M', 0xFC, 'l', 'l', 'e', 'r'}, "M?ller"},
-                                 {{'a', 'b', 0, 'x', 'y', 0, 0}, "ab"},
-                                 {{0x1B, '[', '2', 'J', 'n'}, "?[2Jn"}}) {
+  for (auto [bytes, expected] :
+       {std::pair<od::Bytes, std::string>{{'M', 0xFC, 'l', 'l', 'e', 'r'}, "M?ller"},
+        {{'a', 'b', 0, 'x', 'y', 0, 0}, "ab"},
+        {{0x1B, '[', '2', 'J', 'n'}, "?[2Jn"}}) {
     DiscoveryPlan p;
     run(p, [&](SdoRead r) -> od::SdoResult { return r.index == 0x1008 ? value(bytes) : none(); });
     EXPECT_EQ(p.info().device_name, expected);
@@ -136,7 +138,8 @@ TEST(DiscoveryPlanOrder, RemapAfterDoneReadsOnlyTheTpdos) {
   EXPECT_FALSE(p.finished());
   EXPECT_FALSE(p.mapping_read());
   const auto reads = run(p, answer);
-  for (const SdoRead& r : reads) EXPECT_TRUE(r.index >= 0x1800 && r.index < 0x1C00) << std::hex << r.index;
+  for (const SdoRead& r : reads)
+    EXPECT_TRUE(r.index >= 0x1800 && r.index < 0x1C00) << std::hex << r.index;
   EXPECT_EQ(p.info().axes, 1) << "identity and axes kept";
 }
 

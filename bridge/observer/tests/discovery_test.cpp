@@ -144,7 +144,7 @@ TEST(Discovery, WaitsForAnotherMastersSdoTrafficToEnd) {
   FakeNode node({.id = 5, .axes = 1});
   bus.add(node);
   bus.master_start(5);
-  bus.master_upload(0x1000, 0);  // another master reads the device type ...
+  bus.master_upload(0x1000, 0);    // another master reads the device type ...
   bus.send(node.heartbeat(0x7F));  // ... and then the bridge first hears of the node
   EXPECT_TRUE(bus.observer_sent.empty()) << "the channel was busy a moment ago";
   bus.run_ms(290);

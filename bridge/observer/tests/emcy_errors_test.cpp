@@ -121,8 +121,10 @@ TEST(Emcy, HpErrorNumbersAndInterruptsInWords) {
             "HP error 89: accessory busy (a move is in progress); error register: manufacturer");
   EXPECT_EQ(emcy_text(0xFF5E, 0x80, {}, true),
             "HP error 94: cannot move while standby on; error register: manufacturer");
-  EXPECT_EQ(emcy_text(0xFF43, 0x80, {}, true), "HP interrupt: hard limit; error register: manufacturer");
-  EXPECT_EQ(emcy_text(0xFF45, 0x00, {}, true), "HP interrupt: HALT switch; error register: no error");
+  EXPECT_EQ(emcy_text(0xFF43, 0x80, {}, true),
+            "HP interrupt: hard limit; error register: manufacturer");
+  EXPECT_EQ(emcy_text(0xFF45, 0x00, {}, true),
+            "HP interrupt: HALT switch; error register: no error");
   for (uint8_t n = 89; n <= 94; ++n) EXPECT_NE(hp_error_text(n), nullptr);
   EXPECT_EQ(hp_error_text(88), nullptr);
 }

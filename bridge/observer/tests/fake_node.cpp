@@ -21,10 +21,13 @@ void build_third_party(od::Dictionary& d, const FakeNodeOptions& o) {
         od::encode<uint16_t>(100));
   od::Object& id = d.record(0x1018, "Identity object");
   id.add(1, "Vendor-ID", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(0x000000AB));
-  id.add(2, "Product code", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(o.product_code));
+  id.add(2, "Product code", DataType::Unsigned32, Access::ReadOnly,
+         od::encode<uint32_t>(o.product_code));
   id.add(3, "Revision", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(7));
   id.add(4, "Serial", DataType::Unsigned32, Access::ReadOnly, od::encode<uint32_t>(99));
-  if (o.has_2001) d.var(0x2001, "Digital inputs", DataType::Unsigned16, Access::ReadOnly, od::encode<uint16_t>(0), true);
+  if (o.has_2001)
+    d.var(0x2001, "Digital inputs", DataType::Unsigned16, Access::ReadOnly, od::encode<uint16_t>(0),
+          true);
 }
 
 }  // namespace
@@ -43,8 +46,11 @@ FakeNode::FakeNode(FakeNodeOptions options)
   info.serial_number = 4242;
   info.product_code = options_.stepnode_product_code;
   node::build_device_objects(od_, info,
-                             node::DeviceLayout{.axes = options_.axes, .horner = options_.horner, .hp = options_.hp,
-                                                .user = options_.user, .cia402 = options_.cia402});
+                             node::DeviceLayout{.axes = options_.axes,
+                                                .horner = options_.horner,
+                                                .hp = options_.hp,
+                                                .user = options_.user,
+                                                .cia402 = options_.cia402});
   for (unsigned a = 0; a < options_.axes; ++a) {
     // The device dictionary may have the HP objects already (node/profiles/hp44714a); the
     // values asked for here are set either way.
@@ -95,8 +101,8 @@ od::CanFrame FakeNode::tpdo(unsigned k) {
 }
 
 od::CanFrame FakeNode::emcy(uint16_t code, uint8_t reg, std::array<uint8_t, 5> m) const {
-  return od::CanFrame(0x080 + id(), {static_cast<uint8_t>(code), static_cast<uint8_t>(code >> 8), reg,
-                                     m[0], m[1], m[2], m[3], m[4]});
+  return od::CanFrame(0x080 + id(), {static_cast<uint8_t>(code), static_cast<uint8_t>(code >> 8),
+                                     reg, m[0], m[1], m[2], m[3], m[4]});
 }
 
 void FakeNode::set_status(unsigned axis, uint16_t bits) {

@@ -18,9 +18,9 @@ namespace stepnode::bridge::test {
 struct FakeNodeOptions {
   uint8_t id = 5;
   unsigned axes = 3;
-  bool stepnode = true;       // false: a third-party device (identity, name, no axes)
-  double pscale = 0;          // >0: 0x2n11 PSCALE present with this value (all axes)
-  bool hp_objects = false;    // 0x2n18 DONE? I8 and 0x2n19 HP error U8, mappable
+  bool stepnode = true;     // false: a third-party device (identity, name, no axes)
+  double pscale = 0;        // >0: 0x2n11 PSCALE present with this value (all axes)
+  bool hp_objects = false;  // 0x2n18 DONE? I8 and 0x2n19 HP error U8, mappable
   // The stepnode's profiles (node/device_objects.hpp DeviceLayout). {.horner = false,
   // .hp = false, .user = false, .cia402 = true} is a CiA 402 only device: no 0x2n00
   // objects, TPDO1/2 {6041h, 6061h} / {6064h, 606Ch} of axis 1 at 0x180/0x280 + id.
@@ -29,7 +29,7 @@ struct FakeNodeOptions {
   std::string name = "stepnode";
   // Third-party device only:
   uint32_t product_code = 0x00001234;
-  bool has_2001 = true;       // its own (non-axis) object at 0x2001
+  bool has_2001 = true;  // its own (non-axis) object at 0x2001
   // A second SDO server channel (as 0x1201 configured): client->server, server->client.
   uint32_t channel_rx = 0, channel_tx = 0;
 };
@@ -61,10 +61,10 @@ class FakeNode {
   void set_drive_fault(unsigned axis, uint16_t error_code, int32_t following_error);
 
   // Misbehaviour of the SDO server.
-  bool silent = false;          // requests are not answered (the client times out)
-  unsigned abort_next = 0;      // the next N requests get abort 0x08000000 (general error)
-  unsigned requests_seen = 0;   // SDO requests received
-  bool hold = false;            // responses are kept in `held` until the test releases them
+  bool silent = false;         // requests are not answered (the client times out)
+  unsigned abort_next = 0;     // the next N requests get abort 0x08000000 (general error)
+  unsigned requests_seen = 0;  // SDO requests received
+  bool hold = false;           // responses are kept in `held` until the test releases them
   std::vector<od::CanFrame> held;
 
  private:

@@ -19,7 +19,9 @@ od::CanFrame random_frame(std::mt19937& rng) {
   f.dlc = static_cast<uint8_t>(rng() % 9);
   for (auto& b : f.data) b = static_cast<uint8_t>(rng());
   // SDO and heartbeat bytes that look right now and then.
-  if (rng() % 4 == 0) f.data[0] = static_cast<uint8_t>(std::array{0x00, 0x04, 0x05, 0x7F, 0x60, 0x43, 0x4F, 0x80}[rng() % 8]);
+  if (rng() % 4 == 0)
+    f.data[0] =
+        static_cast<uint8_t>(std::array{0x00, 0x04, 0x05, 0x7F, 0x60, 0x43, 0x4F, 0x80}[rng() % 8]);
   f.rtr = rng() % 20 == 0;
   return f;
 }

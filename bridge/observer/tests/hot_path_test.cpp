@@ -22,7 +22,8 @@ std::atomic<uint64_t> g_allocations{0};
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 void* operator new(std::size_t size) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
   if (void* p = std::malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
@@ -37,11 +38,20 @@ namespace {
 struct CountingSink : SampleSink {
   uint64_t statuses = 0, positions = 0, drives = 0;
   int64_t checksum = 0;
-  void axis_status(const AxisStatusSample& s) override { ++statuses; checksum += s.status_bits; }
-  void axis_position(const AxisPositionSample& s) override { ++positions; checksum += s.motor_position; }
+  void axis_status(const AxisStatusSample& s) override {
+    ++statuses;
+    checksum += s.status_bits;
+  }
+  void axis_position(const AxisPositionSample& s) override {
+    ++positions;
+    checksum += s.motor_position;
+  }
   void node_health(const NodeHealthSample&) override {}
   void emergency(const EmergencySample&) override {}
-  void drive_status(const DriveStatusSample& s) override { ++drives; checksum += s.position_actual; }
+  void drive_status(const DriveStatusSample& s) override {
+    ++drives;
+    checksum += s.position_actual;
+  }
   void dispose_axes(uint8_t, uint8_t) override {}
 };
 
@@ -56,8 +66,8 @@ TEST(HotPath, TpdosAreDecodedWithoutAllocation) {
   }
   // And two CiA 402 only nodes of two axes (TPDO1..4: statusword/mode, position/velocity).
   for (uint8_t id = 11; id <= 12; ++id) {
-    nodes.push_back(std::make_unique<FakeNode>(
-        FakeNodeOptions{.id = id, .axes = 2, .horner = false, .hp = false, .user = false, .cia402 = true}));
+    nodes.push_back(std::make_unique<FakeNode>(FakeNodeOptions{
+        .id = id, .axes = 2, .horner = false, .hp = false, .user = false, .cia402 = true}));
     bus.add(*nodes.back());
     bus.boot(*nodes.back());
   }
@@ -116,11 +126,12 @@ TEST(HotPath, TpdosAreDecodedWithoutAllocation) {
   EXPECT_EQ(g_allocations.load(), 0u);
   EXPECT_TRUE(out.empty());
   EXPECT_EQ(sink.positions - snapshot_positions, uint64_t{kRounds} * 30);
-  EXPECT_EQ(sink.drives - snapshot_drives, uint64_t{kRounds} * 8) << "a DriveStatus per CiA 402 TPDO";
+  EXPECT_EQ(sink.drives - snapshot_drives, uint64_t{kRounds} * 8)
+      << "a DriveStatus per CiA 402 TPDO";
   const double seconds = std::chrono::duration<double>(end - start).count();
   const double rate = static_cast<double>(kRounds) * static_cast<double>(frames.size()) / seconds;
-  std::printf("[ measured ] observer on_frame: %.0f frames/s (%zu frames x %d rounds, %.3f s)\n", rate,
-              frames.size(), kRounds, seconds);
+  std::printf("[ measured ] observer on_frame: %.0f frames/s (%zu frames x %d rounds, %.3f s)\n",
+              rate, frames.size(), kRounds, seconds);
 }
 
 }  // namespace

@@ -46,7 +46,8 @@ TEST_F(Running, AMasterRemappingATpdoIsFollowed) {
   bus.send(node.tpdo(1));
   EXPECT_TRUE(bus.sink.positions.empty())
       << "right after the remap the old layout would read velocity as the motor position";
-  EXPECT_EQ(bus.observer_sent.size(), reads_before) << "the bridge waits for the channel to be quiet";
+  EXPECT_EQ(bus.observer_sent.size(), reads_before)
+      << "the bridge waits for the channel to be quiet";
 
   bus.run_ms(400);  // quiet for 300 ms, then the TPDO parameters are read again
   EXPECT_GT(bus.observer_sent.size(), reads_before);

@@ -50,7 +50,8 @@ TEST_F(Discovered, ValuesLandOnTheAxisTheObjectIndexNames) {
   // DONE? is not in a TPDO here: what discovery's snapshot read stays (unknown when the
   // node has no such object).
   const od::Entry* done = node.dictionary().find(0x2118, 0);
-  EXPECT_EQ(bus.sink.statuses[0].done_code, done ? static_cast<int8_t>(done->value[0]) : kDoneUnknown);
+  EXPECT_EQ(bus.sink.statuses[0].done_code,
+            done ? static_cast<int8_t>(done->value[0]) : kDoneUnknown);
   ASSERT_EQ(bus.sink.positions.size(), 2u);
   EXPECT_EQ(bus.sink.positions[0].axis, 2);
   EXPECT_EQ(bus.sink.positions[0].motor_position, -4000);
@@ -177,7 +178,8 @@ TEST(TpdoDecoding, UnpackingMatchesOdReadBitsForRandomMappings) {
       }
       const unsigned f = rng() % 7;
       if (bits + widths[f] > 64 || t.mapping.size() == 8) break;
-      t.mapping.push_back({static_cast<uint16_t>(0x2000 + 0x100 * (rng() % 8) + offsets[f]), 0, widths[f]});
+      t.mapping.push_back(
+          {static_cast<uint16_t>(0x2000 + 0x100 * (rng() % 8) + offsets[f]), 0, widths[f]});
       bits += widths[f];
     }
     info.tpdos.push_back(t);
@@ -192,22 +194,40 @@ TEST(TpdoDecoding, UnpackingMatchesOdReadBitsForRandomMappings) {
     size_t offset = 0;
     std::map<std::pair<unsigned, uint16_t>, uint64_t> expected;
     for (const od::MappedEntry& e : t.mapping) {
-      if (!e.dummy()) expected[{(e.index - 0x2000u) >> 8, static_cast<uint16_t>(e.index & 0xFF)}] =
-          od::read_bits(of.frame.payload(), offset, e.bits);
+      if (!e.dummy())
+        expected[{(e.index - 0x2000u) >> 8, static_cast<uint16_t>(e.index & 0xFF)}] =
+            od::read_bits(of.frame.payload(), offset, e.bits);
       offset += e.bits;
     }
     for (const auto& [key, v] : expected) {
       const uint8_t axis = static_cast<uint8_t>(key.first + 1);
       const AxisPositionSample* p = nullptr;
-      for (const auto& s : sink.positions) if (s.axis == axis) p = &s;
+      for (const auto& s : sink.positions)
+        if (s.axis == axis) p = &s;
       const AxisStatusSample* st = nullptr;
-      for (const auto& s : sink.statuses) if (s.axis == axis) st = &s;
+      for (const auto& s : sink.statuses)
+        if (s.axis == axis) st = &s;
       switch (key.second) {
-        case 0x01: ASSERT_TRUE(st); EXPECT_EQ(st->status_bits, static_cast<uint16_t>(v)); break;
-        case 0x05: ASSERT_TRUE(p); EXPECT_EQ(p->motor_position, static_cast<int32_t>(v)); break;
-        case 0x06: ASSERT_TRUE(p); EXPECT_EQ(p->encoder_position, static_cast<int32_t>(v)); break;
-        case 0x07: ASSERT_TRUE(p); EXPECT_EQ(p->velocity, static_cast<int32_t>(v)); break;
-        case 0x08: ASSERT_TRUE(p); EXPECT_EQ(p->motion_phase, static_cast<uint8_t>(v)); break;
+        case 0x01:
+          ASSERT_TRUE(st);
+          EXPECT_EQ(st->status_bits, static_cast<uint16_t>(v));
+          break;
+        case 0x05:
+          ASSERT_TRUE(p);
+          EXPECT_EQ(p->motor_position, static_cast<int32_t>(v));
+          break;
+        case 0x06:
+          ASSERT_TRUE(p);
+          EXPECT_EQ(p->encoder_position, static_cast<int32_t>(v));
+          break;
+        case 0x07:
+          ASSERT_TRUE(p);
+          EXPECT_EQ(p->velocity, static_cast<int32_t>(v));
+          break;
+        case 0x08:
+          ASSERT_TRUE(p);
+          EXPECT_EQ(p->motion_phase, static_cast<uint8_t>(v));
+          break;
         case 0x18:
           if (static_cast<int8_t>(v) != kDoneUnknown) {
             ASSERT_TRUE(st);

@@ -14,7 +14,8 @@ namespace stepnode::bridge::test {
 namespace {
 
 struct TwoBridges {
-  explicit TwoBridges(uint32_t jitter_ms) : a(sink_a, config(jitter_ms, 1)), b(sink_b, config(jitter_ms, 2)) {}
+  explicit TwoBridges(uint32_t jitter_ms)
+      : a(sink_a, config(jitter_ms, 1)), b(sink_b, config(jitter_ms, 2)) {}
   static ObserverConfig config(uint32_t jitter_ms, uint32_t seed) {
     ObserverConfig c;
     c.collision_jitter_ms = jitter_ms;
@@ -70,7 +71,8 @@ TEST(TwoBridges, BothDiscoverTheNodeDespiteCollidingFirst) {
   TwoBridges bus(200);
   bus.send(bus.node.boot_up());
   bus.run_ms(5000);
-  const NodeHealthSample ha = bus.a.node_health(5, bus.now_us), hb = bus.b.node_health(5, bus.now_us);
+  const NodeHealthSample ha = bus.a.node_health(5, bus.now_us),
+                         hb = bus.b.node_health(5, bus.now_us);
   EXPECT_TRUE(ha.discovered);
   EXPECT_TRUE(hb.discovered);
   EXPECT_EQ(ha.axes, 2);

@@ -1,5 +1,6 @@
 // Pulse-engine figures (Google Benchmark). Build and run:
-//   cmake --build build --target motion_bench && build/node/motion_bench --benchmark_counters_tabular=true
+//   cmake --build build --target motion_bench && build/node/motion_bench
+//   --benchmark_counters_tabular=true
 //
 // BM_StepsPerSecond: steps the StepGenerator computes per second of CPU time on one core
 //   (counter steps_per_s), for the 245,730 steps/s profile (AQ3=20, AQ4=1, AQ5=8191,
@@ -36,7 +37,8 @@ namespace {
 constexpr double kTickNs = 1e9 / static_cast<double>(kClockHz);  // 203.45 ns
 
 StpcalcInput input_of(const benchmark::State& state) {
-  return StpcalcInput{state.range(0), state.range(1), state.range(2), state.range(3), state.range(4), state.range(5)};
+  return StpcalcInput{state.range(0), state.range(1), state.range(2),
+                      state.range(3), state.range(4), state.range(5)};
 }
 
 std::vector<Tick> engine_steps(const StpcalcInput& in) {
@@ -61,7 +63,8 @@ void BM_StepsPerSecond_Move(benchmark::State& state) {
     while (g.next(s)) ++steps;
     benchmark::DoNotOptimize(s.time);
   }
-  state.counters["steps_per_s"] = benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
+  state.counters["steps_per_s"] =
+      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_StepsPerSecond_Move)->Unit(benchmark::kMillisecond);
 
@@ -78,7 +81,8 @@ void BM_StepsPerSecond_RampsOnly(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(s.time);
   }
-  state.counters["steps_per_s"] = benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
+  state.counters["steps_per_s"] =
+      benchmark::Counter(static_cast<double>(steps), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_StepsPerSecond_RampsOnly)->Unit(benchmark::kMillisecond);
 
@@ -86,8 +90,8 @@ BENCHMARK(BM_StepsPerSecond_RampsOnly)->Unit(benchmark::kMillisecond);
 
 struct Deviation {
   double max_ticks = 0;
-  int64_t worst_step = 0;   // 1-based
-  double max_pulses = 0;    // |k - ideal position at the engine's time of step k|
+  int64_t worst_step = 0;  // 1-based
+  double max_pulses = 0;   // |k - ideal position at the engine's time of step k|
   void add(int64_t k, double engine_ticks, double ideal_ticks) {
     double dev = std::fabs(engine_ticks - ideal_ticks);
     if (dev > max_ticks) max_ticks = dev, worst_step = k;
@@ -109,9 +113,10 @@ Deviation staircase_deviation(const StpcalcInput& in, const std::vector<Tick>& e
   };
   const double total_phase = static_cast<double>(*in.total) * d;
   const double both = static_cast<double>(za + zd) * level_sum(run);
-  const int64_t peak = total_phase >= both ? run
-                                           : base + static_cast<int64_t>(std::floor(
-                                                        total_phase * static_cast<double>(run - base) / both));
+  const int64_t peak = total_phase >= both
+                           ? run
+                           : base + static_cast<int64_t>(std::floor(
+                                        total_phase * static_cast<double>(run - base) / both));
 
   struct Segment {
     double t0, t1, level;
@@ -123,8 +128,8 @@ Deviation staircase_deviation(const StpcalcInput& in, const std::vector<Tick>& e
   const double accel_phase = static_cast<double>(za) * level_sum(peak);
   const double decel_phase = static_cast<double>(zd) * level_sum(peak);
   if (peak > base) {
-    double run_ticks =
-        std::max(0.0, std::ceil((total_phase - decel_phase - accel_phase) / static_cast<double>(peak)));
+    double run_ticks = std::max(
+        0.0, std::ceil((total_phase - decel_phase - accel_phase) / static_cast<double>(peak)));
     segs.push_back({t, t + run_ticks, double(peak)});
     t += run_ticks;
     for (int64_t l = peak; l > base; --l, t += static_cast<double>(zd))
@@ -181,8 +186,10 @@ Deviation trapezoid_deviation(const StpcalcInput& in, const std::vector<Tick>& e
       double y = std::min(x - xa - xr, xd);
       secs = ta + tr + 2 * y / (vc + std::sqrt(std::max(0.0, vc * vc - 2 * dr * y)));
     }
-    dev.add(static_cast<int64_t>(i + 1), static_cast<double>(engine[i]), secs * static_cast<double>(kClockHz));
-    dev.max_pulses = std::max(dev.max_pulses, std::fabs(x - position(static_cast<double>(engine[i]) / kClockHz)));
+    dev.add(static_cast<int64_t>(i + 1), static_cast<double>(engine[i]),
+            secs * static_cast<double>(kClockHz));
+    dev.max_pulses = std::max(dev.max_pulses,
+                              std::fabs(x - position(static_cast<double>(engine[i]) / kClockHz)));
   }
   return dev;
 }
@@ -210,7 +217,7 @@ void BM_MaxDeviation_ContinuousTrapezoid(benchmark::State& state) {
 
 void profiles(benchmark::internal::Benchmark* b) {
   b->ArgNames({"total", "aq3", "aq4", "aq5", "aq6", "aq7"});
-  b->Args({2'000'000, 20, 1, 8191, 100, 0});  // 245,730 steps/s, 12,491-pulse ramps
+  b->Args({2'000'000, 20, 1, 8191, 100, 0});   // 245,730 steps/s, 12,491-pulse ramps
   b->Args({200'000, 60, 10, 8000, 500, 250});  // 80,000 steps/s, decel twice as steep
   b->Args({20'000, 600, 100, 1000, 500, 0});   // 1,000 steps/s from 100
   b->Args({10'000, 1200, 2, 8191, 2000, 0});   // 4,095.5 steps/s from 1 step/s

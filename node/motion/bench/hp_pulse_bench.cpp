@@ -77,10 +77,12 @@ Row measure(double rate, double slope) {
 }  // namespace
 
 int main() {
-  std::printf("HP 44714A pulse output: generated step times vs the ideal train (build/node/hp_pulse_bench)\n");
+  std::printf(
+      "HP 44714A pulse output: generated step times vs the ideal train "
+      "(build/node/hp_pulse_bench)\n");
   std::printf("spec (appendix A): rate accuracy 0.01 %% = 1.0e-04, jitter 1 us = 1000 ns\n\n");
-  std::printf("%10s %10s %9s %12s %16s %14s  %s\n", "rate Hz", "slope Hz/s", "pulses", "rate error", "period jitter ns",
-              "time error ns", "vs spec");
+  std::printf("%10s %10s %9s %12s %16s %14s  %s\n", "rate Hz", "slope Hz/s", "pulses", "rate error",
+              "period jitter ns", "time error ns", "vs spec");
   double worst_rate = 0, worst_jitter = 0;
   for (double slope : {500.0, 100'000.0, 1'000'000.0})
     for (double rate : {1.0, 10.0, 99.99, 123.456, 1000.0, 2500.5, 7777.7, 9999.9}) {
@@ -88,10 +90,11 @@ int main() {
       worst_rate = std::max(worst_rate, r.rate_error);
       worst_jitter = std::max(worst_jitter, r.period_jitter_ns);
       bool ok = r.rate_error < 1e-4 && r.period_jitter_ns < 1000;
-      std::printf("%10.3f %10.0f %9zu %12.3e %16.1f %14.1f  %s\n", r.rate, r.slope, r.pulses, r.rate_error,
-                  r.period_jitter_ns, r.time_error_ns, ok ? "better" : "WORSE");
+      std::printf("%10.3f %10.0f %9zu %12.3e %16.1f %14.1f  %s\n", r.rate, r.slope, r.pulses,
+                  r.rate_error, r.period_jitter_ns, r.time_error_ns, ok ? "better" : "WORSE");
     }
-  std::printf("\nworst rate error %.3e (spec 1.0e-04), worst period jitter %.1f ns (spec 1000 ns)\n", worst_rate,
-              worst_jitter);
+  std::printf(
+      "\nworst rate error %.3e (spec 1.0e-04), worst period jitter %.1f ns (spec 1000 ns)\n",
+      worst_rate, worst_jitter);
   return worst_rate < 1e-4 && worst_jitter < 1000 ? 0 : 1;
 }

@@ -10,8 +10,8 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -53,24 +53,23 @@ class AxisCommands : public harness::AxisHarness {
       if (x.t >= from && ((x.status & bit) != 0) == on) return x.t;
     return -1;
   }
-
 };
 
 // ---- SPM30 3.1 / STP100 4.2.1: power-up ----------------------------------------------------
 
 TEST_F(AxisCommands, Spm30_3_1_PowerUpEveryBitOffButWatchdogPositionZeroInvalid) {
   EXPECT_EQ(axis->status(), status::kPowerUp);  // only %I8
-  EXPECT_EQ(axis->motor_position(), 0);          // SPM30 3.3.1: zero and invalid
-  EXPECT_EQ(axis->encoder_position(), 0);        // SPM30 3.3.2
+  EXPECT_EQ(axis->motor_position(), 0);         // SPM30 3.3.1: zero and invalid
+  EXPECT_EQ(axis->encoder_position(), 0);       // SPM30 3.3.2
   EXPECT_FALSE(has(status::kPositionValid));
   EXPECT_EQ(axis->selected_motor(), 0u);  // SPM30 4 SELECT AXIS: axis 1 by default
 }
 
 TEST_F(AxisCommands, Spm30_3_2_WatchdogInterlockClearErrorsMustBeFirst) {
   // Every command but Clear Errors is refused while %I8 is on.
-  for (uint16_t bit : {command::kFindHomeUp, command::kFindHomeDown, command::kJogUp, command::kJogDown,
-                       command::kMoveRelative, command::kResumeMove, command::kMoveIndexed,
-                       command::kSetPosition}) {
+  for (uint16_t bit : {command::kFindHomeUp, command::kFindHomeDown, command::kJogUp,
+                       command::kJogDown, command::kMoveRelative, command::kResumeMove,
+                       command::kMoveIndexed, command::kSetPosition}) {
     axis->words().destination = 500;
     issue(bit);
     wait(100);
@@ -112,15 +111,15 @@ TEST_F(AxisCommands, Spm30_3_1_ErrorLatchesAndOnlyClearErrorsIsObeyed) {
   EXPECT_EQ(events.back().error_bits, status::kIllegalMove);
   // Ignored while latched: moves, jogs, home, set position, select, stops.
   axis->words().destination = 300;
-  for (uint16_t bit : {command::kMoveRelative, command::kMoveAbsolute, command::kJogUp, command::kFindHomeUp,
-                       command::kSetPosition, command::kSelectAxis1, command::kDecelStop,
-                       command::kImmediateStop}) {
+  for (uint16_t bit : {command::kMoveRelative, command::kMoveAbsolute, command::kJogUp,
+                       command::kFindHomeUp, command::kSetPosition, command::kSelectAxis1,
+                       command::kDecelStop, command::kImmediateStop}) {
     issue(bit);
     wait(50);
     EXPECT_EQ(errors(), status::kIllegalMove) << bit;
     EXPECT_FALSE(any(status::kMoving)) << bit;
   }
-  EXPECT_EQ(axis->motor_position(), 100);  // Set Position was refused too
+  EXPECT_EQ(axis->motor_position(), 100);    // Set Position was refused too
   EXPECT_TRUE(has(status::kPositionValid));  // %I9..%I16 unaffected by the error (3.1)
   wait(1000);
   EXPECT_EQ(errors(), status::kIllegalMove);  // stays latched with time
@@ -199,8 +198,8 @@ TEST_F(AxisCommands, Stp100_4_2_4_WhileMovingOnlyTheStopsAreObeyedAndIgnoredEdge
   ASSERT_TRUE(has(status::kMoving));
   axis->words().destination = 9;
   for (uint16_t bit : {command::kSetPosition, command::kMoveRelative, command::kMoveAbsolute,
-                       command::kJogDown, command::kFindHomeDown, command::kResumeMove, command::kMoveIndexed,
-                       command::kSelectAxis1, command::kClearErrors}) {
+                       command::kJogDown, command::kFindHomeDown, command::kResumeMove,
+                       command::kMoveIndexed, command::kSelectAxis1, command::kClearErrors}) {
     issue(bit);
     EXPECT_TRUE(has(status::kMoving)) << bit;
     EXPECT_FALSE(any(status::kDecelerating)) << bit;
@@ -257,14 +256,14 @@ TEST_F(AxisCommands, Spm30_3_4_RampWordsOutsideTheirRangesAreIllegalMoves) {
     uint16_t aq3, aq4, aq5, aq6, aq7;
   };
   const Bad cases[] = {
-      {19, 100, 1000, 500, 0},     // 3.4.2: divisor 20..65535
-      {600, 0, 1000, 500, 0},      // 3.4.3: base 1..8190
-      {600, 100, 100, 500, 0},     // 3.4.4: running must exceed base
-      {600, 100, 99, 500, 0},      //
-      {600, 100, 8192, 500, 0},    // 3.4.4: running 2..8191
-      {600, 8191, 8191, 500, 0},   // base 8191 cannot be below any running velocity
-      {600, 100, 1000, 0, 0},      // 3.4.5: acceleration 1..27300
-      {600, 100, 1000, 27301, 0},  //
+      {19, 100, 1000, 500, 0},       // 3.4.2: divisor 20..65535
+      {600, 0, 1000, 500, 0},        // 3.4.3: base 1..8190
+      {600, 100, 100, 500, 0},       // 3.4.4: running must exceed base
+      {600, 100, 99, 500, 0},        //
+      {600, 100, 8192, 500, 0},      // 3.4.4: running 2..8191
+      {600, 8191, 8191, 500, 0},     // base 8191 cannot be below any running velocity
+      {600, 100, 1000, 0, 0},        // 3.4.5: acceleration 1..27300
+      {600, 100, 1000, 27301, 0},    //
       {600, 100, 1000, 500, 27301},  // 3.4.6: deceleration 0..27300
   };
   clear();
@@ -275,11 +274,12 @@ TEST_F(AxisCommands, Spm30_3_4_RampWordsOutsideTheirRangesAreIllegalMoves) {
     w.running_velocity = b.aq5;
     w.acceleration_ms = b.aq6;
     w.deceleration_ms = b.aq7;
-    for (uint16_t bit : {command::kMoveRelative, command::kJogUp, command::kFindHomeUp, command::kMoveIndexed}) {
+    for (uint16_t bit :
+         {command::kMoveRelative, command::kJogUp, command::kFindHomeUp, command::kMoveIndexed}) {
       w.destination = 100;
       issue(bit);
-      EXPECT_EQ(errors(), status::kIllegalMove) << b.aq3 << " " << b.aq4 << " " << b.aq5 << " " << b.aq6 << " "
-                                                << b.aq7 << " bit " << bit;
+      EXPECT_EQ(errors(), status::kIllegalMove) << b.aq3 << " " << b.aq4 << " " << b.aq5 << " "
+                                                << b.aq6 << " " << b.aq7 << " bit " << bit;
       EXPECT_FALSE(any(status::kMoving));
       clear();
     }
@@ -312,8 +312,11 @@ TEST_F(AxisCommands, Spm30_3_4_5_RampTimesAboveTheMaximumUsefulValueAreLegal) {
     EXPECT_EQ(errors(), 0) << accel;
     EXPECT_EQ(mech() % 20000, 0) << accel;
     const Tick running = first(trace, status::kAccelerating, false);
-    EXPECT_NEAR(ticks_to_ms(running - start), 3000.0, 1.5) << accel;  // 900 levels of Z = 16384 ticks
-    EXPECT_NEAR(ticks_to_ms(trace.back().t - first(trace, status::kDecelerating, true)), 3000.0, 1.5) << accel;
+    EXPECT_NEAR(ticks_to_ms(running - start), 3000.0, 1.5)
+        << accel;  // 900 levels of Z = 16384 ticks
+    EXPECT_NEAR(ticks_to_ms(trace.back().t - first(trace, status::kDecelerating, true)), 3000.0,
+                1.5)
+        << accel;
   }
 }
 
@@ -352,7 +355,8 @@ TEST_F(AxisCommands, Spm30_4_Jog_RunsWhileHeldAtRunningVelocityThenRampsDown) {
   ASSERT_FALSE(trace.empty());
   EXPECT_FALSE(any(status::kMoving));
   // Ramps down in the deceleration time (AQ7 = 0: the acceleration time, 3.4.6).
-  StpcalcResult calc = stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   EXPECT_NEAR(ticks_to_ms(now - released), calc.deceleration_time_ms, 1.0);
   EXPECT_EQ(axis->motor_position(), mech());
   EXPECT_TRUE(has(status::kPositionValid));  // a ramped stop keeps the position
@@ -408,7 +412,8 @@ TEST_F(AxisCommands, Spm30_4_MoveRelative_TrapezoidTimedAsStpcalc) {
   EXPECT_TRUE(axis->dir_output_high());
   auto trace = walk();
   ASSERT_FALSE(trace.empty());
-  StpcalcResult calc = stpcalc({.total = 3000, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = 3000, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   ASSERT_FALSE(calc.triangular);
   Tick run = first(trace, status::kAccelerating, false);
   Tick decel = first(trace, status::kDecelerating, true);
@@ -441,7 +446,8 @@ TEST_F(AxisCommands, Spm30_4_MoveRelative_ShortMoveNeverPassesTheStpcalcPeak) {
   move_rel(-300);  // needs 550 pulses to reach the running velocity
   EXPECT_FALSE(axis->dir_output_high());
   auto trace = walk();
-  StpcalcResult calc = stpcalc({.total = 300, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = 300, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   ASSERT_TRUE(calc.triangular);
   double peak = 0;
   for (const auto& s : trace) peak = std::max(peak, s.velocity);
@@ -462,7 +468,9 @@ TEST_F(AxisCommands, Spm30_3_4_5_ShortMoveTurnsAtHalfwayWithoutCruising) {
   auto trace = walk();
   int cruising = 0;
   for (const auto& s : trace)
-    if ((s.status & status::kMoving) && !(s.status & (status::kAccelerating | status::kDecelerating))) ++cruising;
+    if ((s.status & status::kMoving) &&
+        !(s.status & (status::kAccelerating | status::kDecelerating)))
+      ++cruising;
   EXPECT_LE(cruising, 1);
   int32_t turn = -1;
   for (const auto& s : trace)
@@ -490,7 +498,8 @@ TEST_F(AxisCommands, Spm30_3_4_6_SeparateDecelerationTimeAndZeroMeaningAccelerat
   Tick start = now;
   move_rel(3000);
   auto trace = walk();
-  StpcalcResult calc = stpcalc({.total = 3000, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 250});
+  StpcalcResult calc =
+      stpcalc({.total = 3000, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 250});
   Tick decel = first(trace, status::kDecelerating, true);
   EXPECT_NEAR(ticks_to_ms(trace.back().t - decel), calc.deceleration_time_ms, 1.5);
   EXPECT_NEAR(ticks_to_ms(trace.back().t - start), calc.total_time_ms, 1.0);
@@ -500,8 +509,8 @@ TEST_F(AxisCommands, Spm30_3_4_6_SeparateDecelerationTimeAndZeroMeaningAccelerat
 TEST_F(AxisCommands, Spm30_3_4_2_VelocityResolutionScalesBaseAndRunning) {
   clear();
   CommandWords& w = axis->words();
-  w.velocity_divisor = 20;  // 30 steps/s per unit
-  w.base_velocity = 10;     // 300 steps/s
+  w.velocity_divisor = 20;    // 30 steps/s per unit
+  w.base_velocity = 10;       // 300 steps/s
   w.running_velocity = 2000;  // 60,000 steps/s
   w.acceleration_ms = 100;
   move_rel(20000);
@@ -600,7 +609,8 @@ TEST_F(AxisCommands, Spm30_4_DecelerateAndStop_RampsToBaseAndStopsKeepingPositio
   issue(command::kDecelStop);
   EXPECT_TRUE(has(status::kDecelerating | status::kMoving));
   walk();
-  StpcalcResult calc = stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   EXPECT_NEAR(ticks_to_ms(now - stop), calc.deceleration_time_ms, 1.0);
   EXPECT_TRUE(has(status::kPositionValid));
   EXPECT_TRUE(has(status::kResumable));
@@ -744,7 +754,8 @@ TEST_F(AxisCommands, Stp100_5_3_6_RepeatMove_RelativeRepeatsBackToBackWhileQ12Is
   hold(command::kRepeatMove);
   Tick start = now;
   move_rel(600);
-  StpcalcResult calc = stpcalc({.total = 600, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = 600, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   // Each move ends and the next starts at once: after k moves the time is k * total time.
   for (int k = 1; k <= 4; ++k) {
     ASSERT_TRUE(walk_until_position(600 * k)) << k;

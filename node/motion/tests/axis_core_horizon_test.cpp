@@ -21,7 +21,9 @@ struct Owner final : FrontEnd {
 };
 
 // 1000 steps/s after a 1 ms ramp (AQ3 600: 1 step/s a level).
-RampSpec constant(int64_t steps_per_s) { return horner_ramp(600, steps_per_s, steps_per_s + 1, 1, 0); }
+RampSpec constant(int64_t steps_per_s) {
+  return horner_ramp(600, steps_per_s, steps_per_s + 1, 1, 0);
+}
 
 // Runs a 1 s job in 1 ms advances (a stop at 0.3 s, or the owner's halt) and returns the
 // train the motor received.

@@ -27,7 +27,9 @@ struct Recorder final : FrontEnd, AxisListener {
 };
 
 // About `steps_per_s` from the start (a 1 ms ramp to one step/s more; AQ3 600: 1 step/s a level).
-RampSpec constant(int64_t steps_per_s) { return horner_ramp(600, steps_per_s, steps_per_s + 1, 1, 0); }
+RampSpec constant(int64_t steps_per_s) {
+  return horner_ramp(600, steps_per_s, steps_per_s + 1, 1, 0);
+}
 
 class AxisCoreTest : public ::testing::Test {
  protected:

@@ -135,7 +135,7 @@ TEST_F(AxisEncoder, Spm30_5_1_NoEncoderReportsAxis1MotorPosition) {
   EXPECT_EQ(axis->encoder_position(), 1410);
   EXPECT_EQ(mech(), 1200);
   EXPECT_TRUE(has(status::kPositionValid));  // nothing to validate against
-  EXPECT_EQ(errors(), 0);                     // %I5 never goes on (5.1)
+  EXPECT_EQ(errors(), 0);                    // %I5 never goes on (5.1)
 }
 
 TEST_F(AxisEncoder, Spm30_3_3_2_EncoderPositionZeroAtPowerUpAndLoadedBySetPosition) {
@@ -160,16 +160,19 @@ struct RatioRow {
   int64_t step_resolution, mlt, div;
 };
 constexpr RatioRow kRatioTable[] = {
-    {200, 1, 5},     {400, 2, 5},     {1000, 1, 1},    {2000, 2, 1},    {5000, 5, 1},    {10000, 10, 1},
-    {12800, 64, 5},  {18000, 18, 1},  {20000, 20, 1},  {21600, 108, 5}, {25000, 25, 1},  {25400, 127, 5},
-    {25600, 128, 5}, {36000, 36, 1},  {50000, 50, 1},  {50800, 254, 5},
+    {200, 1, 5},     {400, 2, 5},     {1000, 1, 1},   {2000, 2, 1},
+    {5000, 5, 1},    {10000, 10, 1},  {12800, 64, 5}, {18000, 18, 1},
+    {20000, 20, 1},  {21600, 108, 5}, {25000, 25, 1}, {25400, 127, 5},
+    {25600, 128, 5}, {36000, 36, 1},  {50000, 50, 1}, {50800, 254, 5},
 };
 
-TEST_F(AxisEncoder, Spm30_5_3_Stp100_6_3_1_EveryRowOfTheRatioTableTracksA1000LineQuadratureEncoder) {
+TEST_F(AxisEncoder,
+       Spm30_5_3_Stp100_6_3_1_EveryRowOfTheRatioTableTracksA1000LineQuadratureEncoder) {
   for (auto module : {AxisConfig::Module::Spm30, AxisConfig::Module::Stp100}) {
     for (const RatioRow& row : kRatioTable) {
-      SCOPED_TRACE(testing::Message() << "step resolution " << row.step_resolution
-                                      << (module == AxisConfig::Module::Spm30 ? " SPM30" : " STP100"));
+      SCOPED_TRACE(testing::Message()
+                   << "step resolution " << row.step_resolution
+                   << (module == AxisConfig::Module::Spm30 ? " SPM30" : " STP100"));
       sim::AxisMachineConfig m = machine();
       m.steps_per_rev = row.step_resolution;
       m.encoder_lines = 1000;
@@ -189,7 +192,8 @@ TEST_F(AxisEncoder, Spm30_5_3_Stp100_6_3_1_EveryRowOfTheRatioTableTracksA1000Lin
         EXPECT_EQ(errors(), 0);
         EXPECT_TRUE(has(status::kPositionValid));
         int64_t lines = mech() * 1000;
-        int64_t counts = lines >= 0 ? lines / row.step_resolution : -((-lines + row.step_resolution - 1) / row.step_resolution);
+        int64_t counts = lines >= 0 ? lines / row.step_resolution
+                                    : -((-lines + row.step_resolution - 1) / row.step_resolution);
         int64_t scaled = counts * row.mlt;
         int64_t expected = scaled >= 0 ? scaled / row.div : -((-scaled + row.div - 1) / row.div);
         EXPECT_EQ(axis->encoder_position(), expected);
@@ -241,7 +245,7 @@ TEST_F(AxisEncoder, Spm30_5_4_PositionInvalidWhenTheDifferenceReachesTheToleranc
   motors[0].displace(-1);
   wait(10);  // compared continuously (STP100 6.3.2), not only while stepping
   EXPECT_FALSE(has(status::kPositionValid));  // |0 - (-10)| reaches 10
-  EXPECT_EQ(errors(), 0);                      // not an error bit
+  EXPECT_EQ(errors(), 0);                     // not an error bit
   // Set Current Position re-validates (encoder loaded too).
   set_position(0);
   EXPECT_TRUE(has(status::kPositionValid));
@@ -359,7 +363,8 @@ TEST_F(AxisEncoder, Stp100_6_3_3_TheThresholdIsTenPercentOfTheTheoreticalVelocit
       set_position(0);
       move_rel(60000);
       walk();
-      SCOPED_TRACE(testing::Message() << "1 step in " << n << ", " << mlt_div << " steps per count");
+      SCOPED_TRACE(testing::Message()
+                   << "1 step in " << n << ", " << mlt_div << " steps per count");
       if (n == 11) {
         EXPECT_EQ(errors(), status::kMotorStalled);
         EXPECT_LE(axis->motor_position(), 2 * 1000 * mlt_div);  // within two long windows
@@ -387,7 +392,8 @@ TEST_F(AxisEncoder, Stp100_6_3_3_JammedMotorLatchesMotorStalledAndStopsAtOnce) {
   EXPECT_GT(axis->motor_position(), 2000);
   EXPECT_LE(axis->motor_position(), 2000 + 64);  // within two detection windows
   bool reported = false;
-  for (const auto& e : events) reported = reported || (e.kind == AxisEvent::Error && e.error_bits == status::kMotorStalled);
+  for (const auto& e : events)
+    reported = reported || (e.kind == AxisEvent::Error && e.error_bits == status::kMotorStalled);
   EXPECT_TRUE(reported);
   uint64_t pulses = motors[0].pulses_received();
   wait(5000);

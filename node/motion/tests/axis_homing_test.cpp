@@ -75,7 +75,6 @@ class AxisHoming : public harness::AxisHarness {
     EXPECT_EQ(axis->motor_position(), destination);
     EXPECT_EQ(axis->encoder_position(), destination);
   }
-
 };
 
 // Steps 1-7 from below the cam, searching up: fast to the cam, back off at base velocity
@@ -85,7 +84,7 @@ TEST_F(AxisHoming, Spm30_4_FindHomeUp_NormalMethodFromBelow) {
   issue(command::kSetPosition);
   ASSERT_TRUE(has(status::kPositionValid));
   home(command::kFindHomeUp, 250);
-  EXPECT_FALSE(has(status::kPositionValid));  // step 1
+  EXPECT_FALSE(has(status::kPositionValid));                  // step 1
   EXPECT_TRUE(has(status::kMoving | status::kAccelerating));  // step 2: a normal move
   EXPECT_TRUE(axis->dir_output_high());
   auto s = walk();
@@ -162,8 +161,8 @@ TEST_F(AxisHoming, Spm30_4_FindHome_NormalMethodRecoversFromAnOvershoot) {
   m.home = sim::Cam{5000, 10};
   build({}, m);
   CommandWords& w = axis->words();
-  w.velocity_divisor = 60;  // 10 steps/s per unit
-  w.base_velocity = 20;     // 200 steps/s
+  w.velocity_divisor = 60;    // 10 steps/s per unit
+  w.base_velocity = 20;       // 200 steps/s
   w.running_velocity = 2000;  // 20,000 steps/s
   w.acceleration_ms = 200;
   home(command::kFindHomeUp, 42);

@@ -9,8 +9,8 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -62,7 +62,6 @@ class AxisIndexed : public harness::AxisHarness {
       if (x.status & bit) return x.t;
     return -1;
   }
-
 };
 
 TEST_F(AxisIndexed, Stp100_5_3_5_IndexInsideTheWindowEndsIndexDestinationPastIt) {
@@ -76,7 +75,8 @@ TEST_F(AxisIndexed, Stp100_5_3_5_IndexInsideTheWindowEndsIndexDestinationPastIt)
   EXPECT_FALSE(axis->dir_output_high());  // taken low at the end of an indexed move
   for (size_t i = 0; i + 1 < s.size(); ++i) EXPECT_TRUE(s[i].dir) << i;  // high while moving
   // The alternate deceleration (%AQ10, 4.2.3.8) from the running velocity.
-  StpcalcResult calc = stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 250});
+  StpcalcResult calc =
+      stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 250});
   Tick decel = first(s, status::kDecelerating);
   ASSERT_GT(decel, 0);
   EXPECT_NEAR(ticks_to_ms(s.back().t - decel), calc.deceleration_time_ms, 1.5);
@@ -130,8 +130,10 @@ TEST_F(AxisIndexed, Stp100_4_2_3_8_ZeroIndexDecelerationMeansTheNormalOne) {
   indexed(10000, 900, 1000, 8000, 0);
   auto s = walk();
   EXPECT_EQ(mech(), 3900);
-  StpcalcResult calc = stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 300});
-  EXPECT_NEAR(ticks_to_ms(s.back().t - first(s, status::kDecelerating)), calc.deceleration_time_ms, 1.5);
+  StpcalcResult calc =
+      stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 300});
+  EXPECT_NEAR(ticks_to_ms(s.back().t - first(s, status::kDecelerating)), calc.deceleration_time_ms,
+              1.5);
 }
 
 TEST_F(AxisIndexed, C1_3_4_AlternateDestinationMayBeLongerThanTheMove) {
@@ -173,7 +175,7 @@ TEST_F(AxisIndexed, Stp100_5_3_5_WindowClosesAtTheDecelerationPoint) {
 }
 
 TEST_F(AxisIndexed, C1_3_4_IndexAlreadyActiveWhenTheWindowOpensIsNotAccepted) {
-  build({}, machine(2990, 30));  // active on [2990, 3019]
+  build({}, machine(2990, 30));    // active on [2990, 3019]
   indexed(6000, 700, 3000, 5000);  // opens while the input is already on
   walk();
   EXPECT_EQ(mech(), 6000);  // received before the window: ignored

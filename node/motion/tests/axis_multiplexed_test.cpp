@@ -37,9 +37,11 @@ TEST_F(AxisMultiplexed, Spm30_3_1_SelectionBitsShowTheSelectedAxis) {
   EXPECT_EQ(axis->selected_motor(), 0u);  // axis 1 after power-up
   EXPECT_FALSE(any(status::kAxis2Selected | status::kAxis3Selected));
   select(2);
-  EXPECT_EQ(axis->status() & (status::kAxis2Selected | status::kAxis3Selected), status::kAxis2Selected);
+  EXPECT_EQ(axis->status() & (status::kAxis2Selected | status::kAxis3Selected),
+            status::kAxis2Selected);
   select(3);
-  EXPECT_EQ(axis->status() & (status::kAxis2Selected | status::kAxis3Selected), status::kAxis3Selected);
+  EXPECT_EQ(axis->status() & (status::kAxis2Selected | status::kAxis3Selected),
+            status::kAxis3Selected);
   select(1);
   EXPECT_FALSE(any(status::kAxis2Selected | status::kAxis3Selected));
   EXPECT_EQ(errors(), 0);
@@ -82,7 +84,7 @@ TEST_F(AxisMultiplexed, Spm30_4_SelectAxis_AtHomeChangedWhileDeselectedInvalidat
   motors[1].displace(1010);  // axis 2 carried onto its home switch while not selected
   select(2);
   EXPECT_TRUE(has(status::kAtHome));
-  EXPECT_EQ(axis->motor_position(), 5);  // restored...
+  EXPECT_EQ(axis->motor_position(), 5);       // restored...
   EXPECT_FALSE(has(status::kPositionValid));  // ...but no longer trusted (step 5)
   // On the switch when deselected, off it when selected again: changed too.
   set_position(1010);

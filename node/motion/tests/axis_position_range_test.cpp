@@ -125,7 +125,7 @@ TEST_F(AxisPositionRange, Stp100_Table4_1_IndexWordsAre1To16777215) {
 TEST_F(AxisPositionRange, Spm30_3_3_IndexedMoveWhoseIndexCouldEndOutsideIsIllegal) {
   CommandWords& w = axis->words();
   set_position(8'380'000);
-  w.destination = 5000;         // the relative move ends on 8,385,000: inside
+  w.destination = 5000;  // the relative move ends on 8,385,000: inside
   w.index_window_open = 100;
   w.index_window_close = 4000;  // an index up to step 3999 ...
   w.index_destination = 3608;   // ... ends 3608 past it: 8,387,607 at most, inside

@@ -213,7 +213,7 @@ TEST_F(AxisRules, Stp100_5_3_4_LimitStartedMoveWaitsForTheLimitToRelease) {
   run_ms(1000);
   EXPECT_EQ(motors[0].position(), 0);
   motors[0].config().upper_limit = 100000;  // the limit input deactivates
-  run_ms(0);                                 // (the node advances on every input change)
+  run_ms(0);                                // (the node advances on every input change)
   EXPECT_TRUE(has(status::kMoving));
   run_ms(3000);
   EXPECT_EQ(motors[0].position(), 300);

@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "node/motion/tests/axis_harness.hpp"
 #include "node/motion/stpcalc.hpp"
+#include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
 namespace {
@@ -40,7 +40,6 @@ class AxisSafety : public harness::AxisHarness {
     EXPECT_FALSE(any(status::kPositionValid | status::kResumable));
     EXPECT_FALSE(axis->next_step_time().has_value());
   }
-
 };
 
 // ---- end limits: SPM30 3.1/3.3.1, STP100 4.2.1 ----------------------------------------------
@@ -281,7 +280,8 @@ TEST_F(AxisSafety, Spm30_3_1_EmergencyStopActiveBeforeACommandRefusesEveryMotion
   estop = true;
   wait(10);
   EXPECT_EQ(errors(), 0);  // STP100 4.2.1: "activated during move"
-  for (uint16_t bit : {command::kMoveRelative, command::kJogUp, command::kFindHomeUp, command::kMoveIndexed}) {
+  for (uint16_t bit :
+       {command::kMoveRelative, command::kJogUp, command::kFindHomeUp, command::kMoveIndexed}) {
     axis->words().destination = 100;
     issue(bit);
     EXPECT_EQ(errors(), status::kEmergencyStop) << bit;
@@ -349,7 +349,8 @@ TEST_F(AxisSafety, MasterLost_MovingAxisDeceleratesNotHaltsAndLatchesWatchdog) {
   EXPECT_EQ(events.back().kind, AxisEvent::Error);
   EXPECT_EQ(events.back().error_bits, status::kPowerUp);
   while (any(status::kMoving) && now < lost + ms(5000)) wait(0.1);
-  StpcalcResult calc = stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
+  StpcalcResult calc =
+      stpcalc({.total = std::nullopt, .aq3 = 600, .aq4 = 100, .aq5 = 1000, .aq6 = 500, .aq7 = 0});
   EXPECT_NEAR(ticks_to_ms(now - lost), calc.deceleration_time_ms, 1.0);
   EXPECT_TRUE(has(status::kPositionValid));  // not a sudden stop
   EXPECT_FALSE(has(status::kResumable));

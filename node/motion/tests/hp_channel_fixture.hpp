@@ -14,7 +14,9 @@
 
 namespace stepnode::motion::hp {
 
-inline constexpr Tick ms(double v) { return static_cast<Tick>(std::llround(v * kClockHz / 1000.0)); }
+inline constexpr Tick ms(double v) {
+  return static_cast<Tick>(std::llround(v * kClockHz / 1000.0));
+}
 inline double to_ms(Tick t) { return static_cast<double>(t) * 1000.0 / kClockHz; }
 
 inline Profile freq(double min, double max, double slope, double pwidth) {

@@ -198,7 +198,8 @@ TEST_F(HpChannel, MoveRampsContinuouslyFromMinToMaxAtTheSlope) {
   EXPECT_EQ(position(), 2000);
   EXPECT_EQ(done(), 0);
   EXPECT_NEAR(to_ms(motor->last_step_time()), ideal_ms, 12);  // within ~one step at min
-  EXPECT_LE(axis->core().generator().marks().peak_level, level_of(axis->core().generator().ramp(), peak) + 1);
+  EXPECT_LE(axis->core().generator().marks().peak_level,
+            level_of(axis->core().generator().ramp(), peak) + 1);
   // First step: at 100 Hz rising, a little under 10 ms after the start.
   ASSERT_TRUE(ch->first_step_time());
   EXPECT_GT(to_ms(*ch->first_step_time()), 9.0);
@@ -618,11 +619,11 @@ TEST_F(HpChannel, AHornerStopEndsAnHpMoveAsAHalt) {
 // Appendix A in WIDTH mode: "Pulse Rate 10 kHz maximum" (a period of 100 us at least) and
 // "Pulse Width 65.535 msec maximum, 1 usec resolution"; every bound.
 TEST_F(HpChannel, AppendixAWidthModeBounds) {
-  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 100e-6), now), Conflict::None);      // 10 kHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 100e-6), now), Conflict::None);  // 10 kHz
   EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 99.9e-6), now), Conflict::OutOfRange);
-  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 10e-6), now), Conflict::OutOfRange);   // 100 kHz
-  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 100e-3), now), Conflict::None);      // 10 Hz
-  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 400'000), now), Conflict::None);     // 2.5 uHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, 10e-6), now), Conflict::OutOfRange);  // 100 kHz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 100e-3), now), Conflict::None);       // 10 Hz
+  EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 400'000), now), Conflict::None);      // 2.5 uHz
   EXPECT_EQ(ch->profile(width(1e-6, 10e-3, 1e-6, 400'001), now), Conflict::OutOfRange);
   EXPECT_EQ(ch->profile(width(1e-6, 65.535e-3, 1e-6, 100e-3), now), Conflict::None);  // widest
   EXPECT_EQ(ch->profile(width(1e-6, 65.536e-3, 1e-6, 100e-3), now), Conflict::OutOfRange);

@@ -24,7 +24,7 @@ TEST_F(HpChannel, Hp3_29_StandbyOnStbyFollowsTheWidthPulseTrain) {
   EXPECT_TRUE(ch->stby_output_high());  // no pulses
   ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
   ASSERT_EQ(ch->sustain(2e-3, true, now), Error::None);  // not error 94
-  EXPECT_TRUE(ch->stby_output_high());  // given, not yet triggered
+  EXPECT_TRUE(ch->stby_output_high());                   // given, not yet triggered
   ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
   EXPECT_FALSE(ch->stby_output_high());  // triggered: low
   wait(1000);
@@ -138,7 +138,8 @@ TEST_F(HpChannel, Hp3_13_Note1_TrigSysWithoutNowaitIsLockedInItsWaitState) {
   EXPECT_EQ(position(), 0);
   EXPECT_EQ(done(), -3);
   EXPECT_EQ(ch->move(5, false, true, now), Error::AccessoryBusy);
-  EXPECT_EQ(ch->trig(TrigMode::Sgl, now), Error::AccessoryBusy);  // "cannot access the trigger command"
+  EXPECT_EQ(ch->trig(TrigMode::Sgl, now),
+            Error::AccessoryBusy);  // "cannot access the trigger command"
   EXPECT_EQ(ch->pscale(2), Error::AccessoryBusy);
   ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);  // cancels it
   EXPECT_FALSE(ch->locked_in_wait());

@@ -36,7 +36,8 @@ TEST_P(HpPulseWidth, Hp3_25To3_28_WidthModePulsesCarryTheRampedWidth) {
   ASSERT_GE(train.size(), 24u);
   for (const sim::TracedPulse& p : train) {
     const double t = seconds(p.time - start);
-    EXPECT_EQ(p.width_ns, us_to_ns(std::min(2e-3, 1e-3 + 5e-3 * t) * 1e6)) << "pulse at " << t << " s";
+    EXPECT_EQ(p.width_ns, us_to_ns(std::min(2e-3, 1e-3 + 5e-3 * t) * 1e6))
+        << "pulse at " << t << " s";
   }
   EXPECT_EQ(motor->last_pulse_width_ns(), 2'000'000u);
   EXPECT_DOUBLE_EQ(ch->current_width(), 2e-3);
@@ -48,7 +49,8 @@ TEST_P(HpPulseWidth, Hp3_25To3_28_WidthModePulsesCarryTheRampedWidth) {
   ASSERT_GE(train.size(), 14u);
   for (const sim::TracedPulse& p : train) {
     const double t = seconds(p.time - change);
-    EXPECT_EQ(p.width_ns, us_to_ns(std::max(1.5e-3, 2e-3 - 5e-3 * t) * 1e6)) << "pulse at " << t << " s";
+    EXPECT_EQ(p.width_ns, us_to_ns(std::max(1.5e-3, 2e-3 - 5e-3 * t) * 1e6))
+        << "pulse at " << t << " s";
   }
   EXPECT_EQ(motor->last_pulse_width_ns(), 1'500'000u);
   EXPECT_DOUBLE_EQ(ch->current_width(), 1.5e-3);

@@ -60,7 +60,8 @@ std::vector<Tick> run(const RampSpec& r, int64_t distance) {
   return ticks;
 }
 
-void expect_closed_form(const std::vector<Tick>& got, const std::vector<Phase>& phases, int64_t distance) {
+void expect_closed_form(const std::vector<Tick>& got, const std::vector<Phase>& phases,
+                        int64_t distance) {
   Real total = 0;
   for (const Phase& p : phases) total += p.seconds;
   ASSERT_EQ(got.size(), static_cast<size_t>(distance));
@@ -75,7 +76,7 @@ TEST(SCurve, SevenPhasesMatchTheClosedForm) {
   // acceleration of (v - a^2/j)/a = 90 ms; each ramp covers v/2 (v/a + a/j) = 55 steps,
   // a 90-step cruise takes 90 ms. Every phase a whole number of ticks.
   const Real j = 1e6, a = 1e4;
-  const std::vector<Phase> phases{{j, 0.01L}, {0, 0.09L}, {-j, 0.01L}, {0, 0.09L},
+  const std::vector<Phase> phases{{j, 0.01L},  {0, 0.09L}, {-j, 0.01L}, {0, 0.09L},
                                   {-j, 0.01L}, {0, 0.09L}, {j, 0.01L}};
   (void)a;
   expect_closed_form(run(s_curve(1000, 10'000, 10'000, 1'000'000), 200), phases, 200);

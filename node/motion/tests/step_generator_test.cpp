@@ -8,14 +8,19 @@ namespace {
 
 // SPM30 3.4.2: the velocity-divisor table, exactly.
 TEST(HornerRamp, VelocityDivisorTableOfSection342) {
-  struct Row { int64_t aq3; double resolution, maximum; };
-  for (Row r : {Row{20, 30.0, 245730.0}, Row{60, 10.0, 81910.0}, Row{120, 5.0, 40955.0 /* printed 40,995.0: 5 x 8191 */},
-                Row{300, 2.0, 16382.0}, Row{600, 1.0, 8191.0}, Row{1200, 0.5, 4095.5}}) {
+  struct Row {
+    int64_t aq3;
+    double resolution, maximum;
+  };
+  for (Row r : {Row{20, 30.0, 245730.0}, Row{60, 10.0, 81910.0},
+                Row{120, 5.0, 40955.0 /* printed 40,995.0: 5 x 8191 */}, Row{300, 2.0, 16382.0},
+                Row{600, 1.0, 8191.0}, Row{1200, 0.5, 4095.5}}) {
     RampSpec ramp = horner_ramp(r.aq3, 1, 8191, 100, 0);
     EXPECT_DOUBLE_EQ(ramp.velocity_of(1), r.resolution) << "AQ3 " << r.aq3;
     EXPECT_DOUBLE_EQ(ramp.velocity_of(8191), r.maximum) << "AQ3 " << r.aq3;
     EXPECT_DOUBLE_EQ(r.resolution * 8191, r.maximum) << "the table's own arithmetic";
-    EXPECT_DOUBLE_EQ(stpcalc({std::nullopt, r.aq3, 1, 8191, 100, 0}).velocity_resolution, r.resolution);
+    EXPECT_DOUBLE_EQ(stpcalc({std::nullopt, r.aq3, 1, 8191, 100, 0}).velocity_resolution,
+                     r.resolution);
   }
 }
 
@@ -30,7 +35,7 @@ TEST(HornerRamp, ZaIsRoundedUpAndZeroDecelerationMeansAcceleration) {
 TEST(HornerRamp, OutOfRangeRegistersAreRefusedWithTheirRange) {
   EXPECT_THROW(horner_ramp(19, 1, 2, 1, 0), std::invalid_argument);
   EXPECT_THROW(horner_ramp(600, 0, 2, 1, 0), std::invalid_argument);
-  EXPECT_THROW(horner_ramp(600, 10, 10, 1, 0), std::invalid_argument);   // run must exceed base
+  EXPECT_THROW(horner_ramp(600, 10, 10, 1, 0), std::invalid_argument);  // run must exceed base
   EXPECT_THROW(horner_ramp(600, 1, 8192, 1, 0), std::invalid_argument);
   EXPECT_NO_THROW(horner_ramp(600, 1, 301, 1001, 0));  // > (AQ5-AQ4)/0.3: legal, "maximum useful"
   EXPECT_EQ(horner_ramp(600, 1, 301, 27300, 27300).decel_ticks_per_level.num, kHornerMaxZ);
@@ -59,7 +64,8 @@ TEST(StepGenerator, RunsAtTheTopRateWithExactIntervals) {
     }
   }
   // n steps at level L span (n-1) * D / L ticks, to one tick (the accumulator's phase).
-  double expected = static_cast<double>(counted - 1) * static_cast<double>(ramp.phase_per_step) / 8191.0;
+  double expected =
+      static_cast<double>(counted - 1) * static_cast<double>(ramp.phase_per_step) / 8191.0;
   EXPECT_GT(counted, 900'000);
   EXPECT_NEAR(static_cast<double>(last - first), expected, 1.0);
   EXPECT_NEAR(ramp.velocity_of(8191), 245730.0, 1e-9);

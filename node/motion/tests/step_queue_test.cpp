@@ -35,12 +35,12 @@ TEST(StepQueue, PositionAtAPastAndAFutureTime) {
   StepQueue q;
   for (Tick t = 10; t <= 50; t += 10) q.went_out(t, +1);  // five up, gone out
   q.push(60, -1);
-  q.push(70, -1);  // two down, queued
-  EXPECT_EQ(q.position_at(5), 0);     // before the first step
-  EXPECT_EQ(q.position_at(10), 1);    // a step counts from its tick on
+  q.push(70, -1);                   // two down, queued
+  EXPECT_EQ(q.position_at(5), 0);   // before the first step
+  EXPECT_EQ(q.position_at(10), 1);  // a step counts from its tick on
   EXPECT_EQ(q.position_at(35), 3);
   EXPECT_EQ(q.position_at(50), 5);
-  EXPECT_EQ(q.position_at(65), 4);    // ahead: the queued step at 60 will have gone out
+  EXPECT_EQ(q.position_at(65), 4);  // ahead: the queued step at 60 will have gone out
   EXPECT_EQ(q.position_at(1000), 3);
 }
 

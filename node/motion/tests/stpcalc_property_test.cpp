@@ -36,7 +36,9 @@ MoveRun run_move(const RampSpec& ramp, int64_t total) {
 }
 
 StpcalcInput random_input(std::mt19937_64& rng) {
-  auto pick = [&](int64_t lo, int64_t hi) { return std::uniform_int_distribution<int64_t>(lo, hi)(rng); };
+  auto pick = [&](int64_t lo, int64_t hi) {
+    return std::uniform_int_distribution<int64_t>(lo, hi)(rng);
+  };
   StpcalcInput in;
   static const int64_t divisors[] = {20, 60, 120, 300, 600, 1200};
   in.aq3 = pick(0, 3) == 0 ? pick(20, 65535) : divisors[pick(0, 5)];
@@ -63,8 +65,9 @@ TEST(StpcalcProperty, TrapezoidalMovesMatchAppendixBWithinOnePulseAndOneMs) {
     RampSpec ramp = horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);
     MoveRun got = run_move(ramp, *in.total);
     const auto& m = got.marks;
-    SCOPED_TRACE(testing::Message() << "total " << *in.total << " AQ3 " << in.aq3 << " AQ4 " << in.aq4
-                                    << " AQ5 " << in.aq5 << " AQ6 " << in.aq6 << " AQ7 " << in.aq7);
+    SCOPED_TRACE(testing::Message()
+                 << "total " << *in.total << " AQ3 " << in.aq3 << " AQ4 " << in.aq4 << " AQ5 "
+                 << in.aq5 << " AQ6 " << in.aq6 << " AQ7 " << in.aq7);
     ASSERT_EQ(got.steps, *in.total);
     EXPECT_NEAR(m.accel_steps, want.acceleration_pulses, 1.0);
     EXPECT_NEAR(m.decel_steps + m.creep_steps, want.deceleration_pulses, 1.0);
@@ -87,16 +90,17 @@ TEST(StpcalcProperty, TriangularMovesHitTheTotalSplitAsTheManualAndTurnWhereTheR
     StpcalcInput in = random_input(rng);
     StpcalcResult ramp_only = stpcalc(in);
     if (ramp_only.total_acc_dec_pulses < 20 || ramp_only.total_acc_dec_pulses > 150'000) continue;
-    in.total = std::uniform_int_distribution<int64_t>(1, static_cast<int64_t>(ramp_only.total_acc_dec_pulses) - 1)(rng);
+    in.total = std::uniform_int_distribution<int64_t>(
+        1, static_cast<int64_t>(ramp_only.total_acc_dec_pulses) - 1)(rng);
     StpcalcResult want = stpcalc(in);
     if (!want.triangular) continue;
     RampSpec ramp = horner_ramp(in.aq3, in.aq4, in.aq5, in.aq6, in.aq7);
     if (stpcalc_peak) ramp.short_move = RampSpec::ShortMove::StpcalcPeak;
     MoveRun got = run_move(ramp, *in.total);
     const auto& m = got.marks;
-    SCOPED_TRACE(testing::Message() << "total " << *in.total << " AQ3 " << in.aq3 << " AQ4 " << in.aq4
-                                    << " AQ5 " << in.aq5 << " AQ6 " << in.aq6 << " AQ7 " << in.aq7
-                                    << (stpcalc_peak ? " STPCALC peak" : ""));
+    SCOPED_TRACE(testing::Message() << "total " << *in.total << " AQ3 " << in.aq3 << " AQ4 "
+                                    << in.aq4 << " AQ5 " << in.aq5 << " AQ6 " << in.aq6 << " AQ7 "
+                                    << in.aq7 << (stpcalc_peak ? " STPCALC peak" : ""));
     ASSERT_EQ(got.steps, *in.total);
     if (stpcalc_peak) {
       // Never faster than STPCALC's peak velocity (B1.3.6).
@@ -113,7 +117,8 @@ TEST(StpcalcProperty, TriangularMovesHitTheTotalSplitAsTheManualAndTurnWhereTheR
         EXPECT_LE(pulses(m.peak_level), total);
       }
       EXPECT_GT(pulses(m.peak_level + 1), total);
-      EXPECT_LE(static_cast<double>(m.run_steps), pulses(m.peak_level + 1) - pulses(m.peak_level) + 1);
+      EXPECT_LE(static_cast<double>(m.run_steps),
+                pulses(m.peak_level + 1) - pulses(m.peak_level) + 1);
     }
     // Acceleration and deceleration pulses in the manual's proportion Z_A : Z_D (B1.3.8),
     // to within the pulses of one velocity level.

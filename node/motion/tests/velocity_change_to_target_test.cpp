@@ -67,7 +67,8 @@ TEST(VelocityChangeToTarget, InTheRampDownToTheTargetALowerVelocityIsNotHeld) {
   // same deceleration): from inside the final ramp (it begins 200 steps before the end at
   // 2000 steps/s) the ramp runs on to the end, step for step as if nothing had been asked.
   StepGenerator changed, plain;
-  for (StepGenerator* g : {&changed, &plain}) g->start(profile_ramp(2000, 10'000, 10'000, kLevels), 0, +1, 3000);
+  for (StepGenerator* g : {&changed, &plain})
+    g->start(profile_ramp(2000, 10'000, 10'000, kLevels), 0, +1, 3000);
   const Tick at = run_to(changed, 2850);
   run_to(plain, 2850);
   changed.change_velocity(at, 1000 * kLevels);

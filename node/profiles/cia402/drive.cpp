@@ -47,9 +47,11 @@ motion::Rational Drive::quick_stop_slope() const {
   // 6085h on the grid of whatever motion runs (the Horner registers' too).
   const motion::RampSpec& r = core_.generator().ramp();
   const int64_t decel = std::max<uint32_t>(parameters_.quick_stop_deceleration, 1);
-  if (r.phase_per_step == motion::kClockHz * grid_) return motion::slope_ticks_per_level(decel, grid_);
+  if (r.phase_per_step == motion::kClockHz * grid_)
+    return motion::slope_ticks_per_level(decel, grid_);
   // Another grid: ticks per level = kClockHz^2 / (decel * phase_per_step), to 1/4096 tick.
-  const double ticks = static_cast<double>(motion::kClockHz) * static_cast<double>(motion::kClockHz) /
+  const double ticks = static_cast<double>(motion::kClockHz) *
+                       static_cast<double>(motion::kClockHz) /
                        (static_cast<double>(decel) * static_cast<double>(r.phase_per_step));
   return motion::Rational{std::max<int64_t>(1, std::llround(ticks * 4096)), 4096};
 }
@@ -64,12 +66,8 @@ void Drive::carry_out(Stop stop, Tick now) {
     case Stop::Immediate:
       core_.abort(this, now);  // current/voltage limit: the fastest stop that holds the motor
       break;
-    case Stop::SlowDownRamp:
-      core_.stop(now);
-      break;
-    case Stop::QuickStopRamp:
-      core_.stop(now, quick_stop_slope());
-      break;
+    case Stop::SlowDownRamp: core_.stop(now); break;
+    case Stop::QuickStopRamp: core_.stop(now, quick_stop_slope()); break;
   }
   active_.reset();
   next_.reset();
@@ -108,7 +106,8 @@ void Drive::controlword(uint16_t cw, Tick now) {
         !(previous & cw_pp::kNewSetPoint))
       new_set_point(cw, now);
     // PV follows the target velocity whenever operation is enabled and not halted.
-    if (mode_display_ == Mode::ProfileVelocity && !halted_ && (!was_enabled || (previous & cw::kHalt)))
+    if (mode_display_ == Mode::ProfileVelocity && !halted_ &&
+        (!was_enabled || (previous & cw::kHalt)))
       velocity_to(target_velocity_, now);
   } else {
     halted_ = false;
@@ -136,7 +135,8 @@ void Drive::set_mode(Mode mode, Tick now) {
     if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
     core_.stop(now);
   }
-  if (mode_display_ == Mode::ProfileVelocity && mode_ == mode_display_ && machine_.operation_enabled() && !halted_)
+  if (mode_display_ == Mode::ProfileVelocity && mode_ == mode_display_ &&
+      machine_.operation_enabled() && !halted_)
     velocity_to(target_velocity_, now);
   notify();
 }
@@ -164,10 +164,12 @@ void Drive::halt(bool on, Tick now) {
 void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
-  const bool limit = step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
+  const bool limit =
+      step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
   if (!limit) {
     // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
-    if (next_ && next_->through && active_ && core_.position() == active_->target) pass_first_target(step.time);
+    if (next_ && next_->through && active_ && core_.position() == active_->target)
+      pass_first_target(step.time);
     return;
   }
   core_.halt(*this, step.time);
@@ -233,7 +235,8 @@ void Drive::fault(uint16_t error_code, Tick now) {
 void Drive::connection_lost(int16_t option_6007, Tick now) {
   core_.advance_to(now);
   // 6007h 1 (or another value: as 1) makes the loss a fault whose cause persists.
-  connection_lost_ = option_6007 != option::kAbortNoAction && option_6007 != option::kAbortDisableVoltage &&
+  connection_lost_ = option_6007 != option::kAbortNoAction &&
+                     option_6007 != option::kAbortDisableVoltage &&
                      option_6007 != option::kAbortQuickStop;
   carry_out(machine_.abort_connection(option_6007), now);
   notify();
@@ -245,8 +248,10 @@ void Drive::advanced(Tick now) {
   if (stopping_for_machine_ && !core_.moving()) stopped(now);
   check_following_error(now);
   // 6062h: the interpolated trajectory in CSP and IP; otherwise (open loop) the steps given.
-  const bool interpolating = mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
-  demand_ = interpolating && core_.owned_by(*this) ? static_cast<int32_t>(cyclic_demand(now)) : core_.position();
+  const bool interpolating =
+      mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
+  demand_ = interpolating && core_.owned_by(*this) ? static_cast<int32_t>(cyclic_demand(now))
+                                                   : core_.position();
   machine_.set_fault_condition_active(core_.estop_active() || connection_lost_);
   // The e-stop input is a fault whether or not the axis moves (the core tells of it only
   // when it ends a job).
@@ -255,7 +260,8 @@ void Drive::advanced(Tick now) {
     carry_out(machine_.fault(kExternalError), now);
   // Target reached (PP): the trajectory is at the target and has been inside the position
   // window (6067h) for the window time (6068h); halted: the velocity is 0.
-  const Tick window = static_cast<Tick>(parameters_.position_window_time_ms) * motion::kClockHz / 1000;
+  const Tick window =
+      static_cast<Tick>(parameters_.position_window_time_ms) * motion::kClockHz / 1000;
   if (halted_) target_reached_ = !core_.moving();
   else if (active_ || core_.owned_by(*this)) target_reached_ = false;
   else if (in_window_since_) target_reached_ = now - *in_window_since_ >= window;

@@ -29,10 +29,12 @@ enum class Mode : int8_t {
 // The modes this drive runs today; 6060h refuses the others.
 constexpr bool runs(Mode m) {
   return m == Mode::ProfilePosition || m == Mode::ProfileVelocity || m == Mode::Homing ||
-         m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition || m == Mode::CyclicSyncVelocity;
+         m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition ||
+         m == Mode::CyclicSyncVelocity;
 }
 constexpr bool cyclic(Mode m) {
-  return m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition || m == Mode::CyclicSyncVelocity;
+  return m == Mode::InterpolatedPosition || m == Mode::CyclicSyncPosition ||
+         m == Mode::CyclicSyncVelocity;
 }
 
 // Controlword bits 4..9, mode-specific (CiA 402-2 "Profile position mode": 6040h bits).
@@ -61,27 +63,27 @@ constexpr uint16_t kHomingOperationStart = 1u << 4;
 
 // The profile (6067h..6085h, 607Dh) in steps, steps/s and steps/s^2.
 struct Parameters {
-  uint32_t max_velocity = 100'000;          // 607Fh
-  uint32_t profile_velocity = 1'000;        // 6081h
-  uint32_t acceleration = 10'000;           // 6083h
-  uint32_t deceleration = 10'000;           // 6084h
+  uint32_t max_velocity = 100'000;            // 607Fh
+  uint32_t profile_velocity = 1'000;          // 6081h
+  uint32_t acceleration = 10'000;             // 6083h
+  uint32_t deceleration = 10'000;             // 6084h
   uint32_t quick_stop_deceleration = 50'000;  // 6085h
-  int16_t motion_profile_type = 0;          // 6086h: 0 trapezoid, 3 jerk-limited (PP, PV)
+  int16_t motion_profile_type = 0;            // 6086h: 0 trapezoid, 3 jerk-limited (PP, PV)
   // 60A4h:1..4 in steps/s^3: begin acceleration, begin deceleration, end acceleration, end
   // deceleration jerk (0: not limited).
   uint32_t jerk[4] = {10'000, 10'000, 10'000, 10'000};
-  uint32_t position_window = 0;             // 6067h: |target - actual| <= window
-  uint16_t position_window_time_ms = 0;     // 6068h
-  int32_t min_position_limit = INT32_MIN;   // 607Dh:1
-  int32_t max_position_limit = INT32_MAX;   // 607Dh:2
-  int8_t homing_method = 0;                 // 6098h
-  uint32_t homing_switch_speed = 1'000;     // 6099h:1
-  uint32_t homing_zero_speed = 100;         // 6099h:2
-  uint32_t homing_acceleration = 1'000;     // 609Ah
-  int32_t home_offset = 0;                  // 607Ch: the position of the home position
+  uint32_t position_window = 0;            // 6067h: |target - actual| <= window
+  uint16_t position_window_time_ms = 0;    // 6068h
+  int32_t min_position_limit = INT32_MIN;  // 607Dh:1
+  int32_t max_position_limit = INT32_MAX;  // 607Dh:2
+  int8_t homing_method = 0;                // 6098h
+  uint32_t homing_switch_speed = 1'000;    // 6099h:1
+  uint32_t homing_zero_speed = 100;        // 6099h:2
+  uint32_t homing_acceleration = 1'000;    // 609Ah
+  int32_t home_offset = 0;                 // 607Ch: the position of the home position
   motion::Tick interpolation_period = motion::kClockHz / 1000;  // 60C2h, until SYNCs are seen
-  uint32_t following_error_window = UINT32_MAX;  // 6065h (UINT32_MAX: off)
-  uint16_t following_error_timeout_ms = 0;       // 6066h
+  uint32_t following_error_window = UINT32_MAX;                 // 6065h (UINT32_MAX: off)
+  uint16_t following_error_timeout_ms = 0;                      // 6066h
 };
 
 class Drive final : public motion::FrontEnd, public motion::AxisListener {
@@ -94,10 +96,10 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void power_up(motion::Tick now);
 
   // ---- what the master writes
-  void controlword(uint16_t cw, motion::Tick now);  // 6040h
-  void set_mode(Mode mode, motion::Tick now);        // 6060h (runs(mode) only)
+  void controlword(uint16_t cw, motion::Tick now);                       // 6040h
+  void set_mode(Mode mode, motion::Tick now);                            // 6060h (runs(mode) only)
   void set_target_position(int32_t steps) { target_position_ = steps; }  // 607Ah
-  void set_target_velocity(int32_t steps_per_s, motion::Tick now);      // 60FFh
+  void set_target_velocity(int32_t steps_per_s, motion::Tick now);       // 60FFh
   Parameters& parameters() { return parameters_; }
   void set_options(const Options& options) { machine_.set_options(options); }
 
@@ -116,14 +118,14 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void set_ip_set_point(int32_t steps) { ip_set_point_ = steps; }  // 60C1h:1
 
   // ---- what the master reads
-  uint16_t statusword() const;                        // 6041h
+  uint16_t statusword() const;                         // 6041h
   Mode mode_display() const { return mode_display_; }  // 6061h
   State state() const { return machine_.state(); }
   uint16_t error_code() const { return machine_.error_code(); }  // 603Fh
-  int32_t position_demand() const { return demand_; }  // 6062h: where the trajectory is
-  int32_t position_actual() const { return core_.position(); }  // 6063h/6064h (open loop)
-  int32_t velocity_actual() const;                    // 606Ch, steps/s signed
-  uint32_t digital_inputs() const;                    // 60FDh
+  int32_t position_demand() const { return demand_; }            // 6062h: where the trajectory is
+  int32_t position_actual() const { return core_.position(); }   // 6063h/6064h (open loop)
+  int32_t velocity_actual() const;                               // 606Ch, steps/s signed
+  uint32_t digital_inputs() const;                               // 60FDh
   int32_t following_error() const { return following_error_value_; }  // 60F4h
   const DriveStateMachine& machine() const { return machine_; }
 

@@ -39,7 +39,8 @@ void Drive::measure_cycle(Tick arrival) {
       cycle_ = (3 * cycle_ + d) / 4;
       odd_intervals_ = 0;
     } else if (d > 0) {
-      const bool agrees = odd_intervals_ > 0 && 4 * d >= 3 * odd_interval_ && 4 * d <= 5 * odd_interval_;
+      const bool agrees =
+          odd_intervals_ > 0 && 4 * d >= 3 * odd_interval_ && 4 * d <= 5 * odd_interval_;
       odd_interval_ = agrees ? (odd_interval_ + d) / 2 : d;
       odd_intervals_ = agrees ? odd_intervals_ + 1 : 1;
       if (odd_intervals_ >= 8) {
@@ -82,7 +83,8 @@ void Drive::cyclic_position(int64_t target, Tick now) {
   }
   // No faster than 607Fh, and no more than a step a tick: beyond, the axis lags and the
   // following error shows it.
-  const int64_t most = std::max<int64_t>(1, int64_t{parameters_.max_velocity} * seg_ticks_ / motion::kClockHz);
+  const int64_t most =
+      std::max<int64_t>(1, int64_t{parameters_.max_velocity} * seg_ticks_ / motion::kClockHz);
   steps = std::min({steps, most, seg_ticks_});
   motion::RampSpec r;
   r.phase_per_step = seg_ticks_;
@@ -93,7 +95,8 @@ void Drive::cyclic_position(int64_t target, Tick now) {
 
 void Drive::cyclic_velocity(int64_t velocity, Tick now) {
   if (core_.busy() && !core_.owned_by(*this)) return;
-  velocity = std::clamp<int64_t>(velocity, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
+  velocity =
+      std::clamp<int64_t>(velocity, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
   const motion::StepGenerator& g = core_.generator();
   if (velocity == 0) {
     if (core_.owned_by(*this)) core_.halt(*this, now);
@@ -121,13 +124,15 @@ int64_t Drive::cyclic_demand(Tick now) const {
 }
 
 void Drive::check_following_error(Tick now) {
-  const bool position_mode = mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
+  const bool position_mode =
+      mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
   following_error_value_ = position_mode && machine_.operation_enabled()
                                ? static_cast<int32_t>(cyclic_demand(now) - core_.position())
                                : 0;
   // 60F4h beyond 6065h for longer than 6066h: bit 13, and a fault (8611h).
-  const bool outside = parameters_.following_error_window != UINT32_MAX &&
-                       std::llabs(int64_t{following_error_value_}) > int64_t{parameters_.following_error_window};
+  const bool outside =
+      parameters_.following_error_window != UINT32_MAX &&
+      std::llabs(int64_t{following_error_value_}) > int64_t{parameters_.following_error_window};
   if (!outside) {
     following_error_since_.reset();
     following_error_ = false;

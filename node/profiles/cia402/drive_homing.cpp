@@ -49,12 +49,8 @@ void Drive::homing_step(const motion::Step& step) {
   const HomingSearch& s = searches_[search_];
   if (happened(s.until, before, in)) {
     switch (s.then) {
-      case HomingSearch::Then::Stop:
-        search_stopping_ = true;
-        return core_.stop(step.time);
-      case HomingSearch::Then::Continue:
-        ++search_;
-        return;
+      case HomingSearch::Then::Stop: search_stopping_ = true; return core_.stop(step.time);
+      case HomingSearch::Then::Continue: ++search_; return;
       case HomingSearch::Then::Home:
         core_.halt(*this, step.time);
         return homing_done(true, step.time);
@@ -64,7 +60,8 @@ void Drive::homing_step(const motion::Step& step) {
   // home switch turns back there once (the same search the other way, after the ramp);
   // otherwise the method cannot be performed here.
   const bool limit = step.direction < 0 ? in.negative_limit : in.positive_limit;
-  const bool wanted = s.until == (step.direction < 0 ? HomingEvent::NegativeLimitOn : HomingEvent::PositiveLimitOn);
+  const bool wanted =
+      s.until == (step.direction < 0 ? HomingEvent::NegativeLimitOn : HomingEvent::PositiveLimitOn);
   if (limit && !wanted && s.reverse_at_limit) {
     HomingSearch back = s;
     back.direction = -s.direction;

@@ -68,7 +68,8 @@ void Drive::new_set_point(uint16_t cw, Tick now) {
 }
 
 motion::RampSpec Drive::ramp(uint32_t velocity) const {
-  const int64_t v = std::clamp<int64_t>(velocity, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
+  const int64_t v =
+      std::clamp<int64_t>(velocity, 1, std::max<uint32_t>(parameters_.max_velocity, 1));
   const int64_t acc = std::max<uint32_t>(parameters_.acceleration, 1);
   const int64_t dec = std::max<uint32_t>(parameters_.deceleration, 1);
   motion::RampSpec r = motion::profile_ramp(v, acc, dec, grid_);
@@ -87,8 +88,10 @@ void Drive::start_positioning(const SetPoint& sp, Tick now) {
     in_window_since_ = now;  // already there
     return;
   }
-  grid_ = motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
-  if (!core_.start(*this, ramp(sp.velocity), sign(distance), std::llabs(distance), now)) active_.reset();
+  grid_ =
+      motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
+  if (!core_.start(*this, ramp(sp.velocity), sign(distance), std::llabs(distance), now))
+    active_.reset();
 }
 
 // ---- change on set-point ----------------------------------------------------------------

@@ -16,20 +16,23 @@ int sign(int64_t v) { return v < 0 ? -1 : +1; }
 
 void Drive::set_target_velocity(int32_t steps_per_s, Tick now) {
   target_velocity_ = steps_per_s;
-  if (mode_display_ != Mode::ProfileVelocity || mode_ != mode_display_ || !machine_.operation_enabled() || halted_)
+  if (mode_display_ != Mode::ProfileVelocity || mode_ != mode_display_ ||
+      !machine_.operation_enabled() || halted_)
     return;
   core_.advance_to(now);
   velocity_to(steps_per_s, now);
   notify();
 }
 
-
 void Drive::velocity_to(int64_t target, Tick now) {
-  target = std::clamp<int64_t>(target, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
+  target =
+      std::clamp<int64_t>(target, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
   if (!core_.owned_by(*this)) {
     if (target == 0 || core_.busy()) return;
-    grid_ = motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
-    core_.start(*this, ramp(static_cast<uint32_t>(std::llabs(target))), sign(target), std::nullopt, now);
+    grid_ =
+        motion::profile_levels_per_hz(std::max(parameters_.acceleration, parameters_.deceleration));
+    core_.start(*this, ramp(static_cast<uint32_t>(std::llabs(target))), sign(target), std::nullopt,
+                now);
     return;
   }
   const motion::StepGenerator& g = core_.generator();

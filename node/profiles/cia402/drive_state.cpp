@@ -57,16 +57,18 @@ Command decode(uint16_t controlword, uint16_t previous_controlword) {
 
 Command decode(uint16_t controlword, uint16_t previous_controlword, State state) {
   Command command = decode(controlword, previous_controlword);
-  if (command == Command::SwitchOn && state == State::OperationEnabled) return Command::DisableOperation;
+  if (command == Command::SwitchOn && state == State::OperationEnabled)
+    return Command::DisableOperation;
   if (command == Command::SwitchOnAndEnable &&
-      (state == State::SwitchedOn || state == State::OperationEnabled || state == State::QuickStopActive))
+      (state == State::SwitchedOn || state == State::OperationEnabled ||
+       state == State::QuickStopActive))
     return Command::EnableOperation;
   return command;
 }
 
 bool powered(State state) {
-  return state == State::SwitchedOn || state == State::OperationEnabled || state == State::QuickStopActive ||
-         state == State::FaultReactionActive;
+  return state == State::SwitchedOn || state == State::OperationEnabled ||
+         state == State::QuickStopActive || state == State::FaultReactionActive;
 }
 
 uint16_t state_bits(State state) {
@@ -89,9 +91,14 @@ uint16_t state_bits(State state) {
 Stop quick_stop_stop(int16_t option_605a) {
   switch (option_605a) {
     case 0: return Stop::DisableDrive;
-    case 1: case 5: return Stop::SlowDownRamp;
-    case 2: case 6: return Stop::QuickStopRamp;
-    case 3: case 4: case 7: case 8: return Stop::Immediate;
+    case 1:
+    case 5: return Stop::SlowDownRamp;
+    case 2:
+    case 6: return Stop::QuickStopRamp;
+    case 3:
+    case 4:
+    case 7:
+    case 8: return Stop::Immediate;
     default: return quick_stop_stop(option::kQuickStopDefault);
   }
 }
@@ -118,7 +125,8 @@ Stop halt_stop(int16_t option_605d) {
   switch (option_605d) {
     case 1: return Stop::SlowDownRamp;
     case 2: return Stop::QuickStopRamp;
-    case 3: case 4: return Stop::Immediate;
+    case 3:
+    case 4: return Stop::Immediate;
     default: return halt_stop(option::kHaltDefault);
   }
 }
@@ -128,7 +136,8 @@ Stop fault_reaction_stop(int16_t option_605e) {
     case 0: return Stop::DisableDrive;
     case 1: return Stop::SlowDownRamp;
     case 2: return Stop::QuickStopRamp;
-    case 3: case 4: return Stop::Immediate;
+    case 3:
+    case 4: return Stop::Immediate;
     default: return fault_reaction_stop(option::kFaultReactionDefault);
   }
 }

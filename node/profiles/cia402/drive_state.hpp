@@ -120,7 +120,8 @@ constexpr int16_t kHaltMin = 1, kHaltMax = 4, kHaltDefault = 1;
 constexpr int16_t kFaultReactionMax = 4, kFaultReactionDefault = 2;
 // 6007h abort connection: 0 no action, 1 fault signal, 2 disable voltage command, 3 quick
 // stop command. Default 1.
-constexpr int16_t kAbortNoAction = 0, kAbortFault = 1, kAbortDisableVoltage = 2, kAbortQuickStop = 3;
+constexpr int16_t kAbortNoAction = 0, kAbortFault = 1, kAbortDisableVoltage = 2,
+                  kAbortQuickStop = 3;
 constexpr int16_t kAbortConnectionDefault = kAbortFault;
 }  // namespace option
 

@@ -30,12 +30,12 @@ uint16_t Drive::statusword() const {
       const bool moving = core_.moving();
       const int64_t want = std::llabs(int64_t{target_velocity_});
       // Velocity reached: running at the target (its level), or stopped for a 0 target.
-      const bool reached = halted_ ? !moving
-                                   : (want == 0 ? !moving
-                                                : moving && core_.owned_by(*this) &&
-                                                      g.level() == want * grid_ &&
-                                                      g.phase() != motion::MotionPhase::Accelerating &&
-                                                      g.phase() != motion::MotionPhase::Decelerating);
+      const bool reached =
+          halted_ ? !moving
+                  : (want == 0 ? !moving
+                               : moving && core_.owned_by(*this) && g.level() == want * grid_ &&
+                                     g.phase() != motion::MotionPhase::Accelerating &&
+                                     g.phase() != motion::MotionPhase::Decelerating);
       if (reached) s |= sw::kTargetReached;
       if (!moving) s |= sw_mode::kSpeedZero;
       break;
@@ -47,16 +47,20 @@ uint16_t Drive::statusword() const {
         case Homing::Idle: s |= core_.owned_by(*this) ? 0 : sw::kTargetReached; break;
         case Homing::InProgress: break;
         case Homing::Attained: s |= sw_mode::kHomingAttained | sw::kTargetReached; break;
-        case Homing::Error: s |= sw_mode::kHomingError | (core_.moving() ? 0 : sw::kTargetReached); break;
+        case Homing::Error:
+          s |= sw_mode::kHomingError | (core_.moving() ? 0 : sw::kTargetReached);
+          break;
       }
       break;
     case Mode::CyclicSyncPosition:
     case Mode::CyclicSyncVelocity: {
       // Bit 12: the drive follows the command value (enabled, not halted, no other front
       // end's job); bit 13 (CSP): following error.
-      const bool follows = machine_.operation_enabled() && !halted_ && (!core_.busy() || core_.owned_by(*this));
+      const bool follows =
+          machine_.operation_enabled() && !halted_ && (!core_.busy() || core_.owned_by(*this));
       if (follows) s |= sw_mode::kDriveFollows;
-      if (following_error_ && mode_display_ == Mode::CyclicSyncPosition) s |= sw_mode::kFollowingError;
+      if (following_error_ && mode_display_ == Mode::CyclicSyncPosition)
+        s |= sw_mode::kFollowingError;
       break;
     }
     case Mode::InterpolatedPosition:

@@ -12,7 +12,8 @@ constexpr bool kFast = true, kSlow = false;
 // `active_side`: the direction in which the switch is active (3, 4, 19, 20: positive home
 // switch; 5, 6, 21, 22: negative); `index_side`: where of the edge the home position lies;
 // `with_index`: 3..6.
-std::vector<HomingSearch> home_switch_plan(int active_side, int index_side, bool with_index, bool home_active) {
+std::vector<HomingSearch> home_switch_plan(int active_side, int index_side, bool with_index,
+                                           bool home_active) {
   std::vector<HomingSearch> plan;
   auto edge = [&](int direction, HomingEvent until, bool fast, Then then) {
     plan.push_back({direction, fast, until, then});
@@ -48,8 +49,8 @@ std::vector<HomingSearch> home_switch_plan(int active_side, int index_side, bool
 // (7..10 positive, 11..14 negative) until the switch comes on, reversing once at the limit
 // switch if that direction leads away from it; it stops inside the switch (wider than the
 // stopping distance). On the switch at the start, the drive goes for the edge at once.
-std::vector<HomingSearch> home_window_plan(int initial_direction, bool upper, int final_direction, bool with_index,
-                                           bool home_active) {
+std::vector<HomingSearch> home_window_plan(int initial_direction, bool upper, int final_direction,
+                                           bool with_index, bool home_active) {
   std::vector<HomingSearch> plan;
   if (!home_active) {
     HomingSearch find{initial_direction, kFast, E::HomeOn, Then::Stop};
@@ -79,7 +80,7 @@ std::vector<HomingSearch> window_method(int8_t method, bool with_index, bool hom
     int final_direction;
   };
   static constexpr Row kRows[] = {
-      {kPos, false, kNeg}, {kPos, false, kPos}, {kPos, true, kNeg}, {kPos, true, kPos},   // 7..10
+      {kPos, false, kNeg}, {kPos, false, kPos}, {kPos, true, kNeg},  {kPos, true, kPos},   // 7..10
       {kNeg, true, kPos},  {kNeg, true, kNeg},  {kNeg, false, kPos}, {kNeg, false, kNeg},  // 11..14
   };
   const Row& r = kRows[method - 7];
@@ -104,16 +105,20 @@ bool happened(HomingEvent event, const HomingInputs& b, const HomingInputs& a) {
 std::optional<std::vector<HomingSearch>> homing_plan(int8_t method, bool home_active) {
   switch (method) {
     // Limit switch, then (1, 2) the first index pulse after it is released.
-    case 1: return std::vector<HomingSearch>{{kNeg, kFast, E::NegativeLimitOn, Then::Stop},
-                                             {kPos, kSlow, E::NegativeLimitOff, Then::Continue},
-                                             {kPos, kSlow, E::IndexOn, Then::Home}};
-    case 2: return std::vector<HomingSearch>{{kPos, kFast, E::PositiveLimitOn, Then::Stop},
-                                             {kNeg, kSlow, E::PositiveLimitOff, Then::Continue},
-                                             {kNeg, kSlow, E::IndexOn, Then::Home}};
-    case 17: return std::vector<HomingSearch>{{kNeg, kFast, E::NegativeLimitOn, Then::Stop},
-                                              {kPos, kSlow, E::NegativeLimitOff, Then::Home}};
-    case 18: return std::vector<HomingSearch>{{kPos, kFast, E::PositiveLimitOn, Then::Stop},
-                                              {kNeg, kSlow, E::PositiveLimitOff, Then::Home}};
+    case 1:
+      return std::vector<HomingSearch>{{kNeg, kFast, E::NegativeLimitOn, Then::Stop},
+                                       {kPos, kSlow, E::NegativeLimitOff, Then::Continue},
+                                       {kPos, kSlow, E::IndexOn, Then::Home}};
+    case 2:
+      return std::vector<HomingSearch>{{kPos, kFast, E::PositiveLimitOn, Then::Stop},
+                                       {kNeg, kSlow, E::PositiveLimitOff, Then::Continue},
+                                       {kNeg, kSlow, E::IndexOn, Then::Home}};
+    case 17:
+      return std::vector<HomingSearch>{{kNeg, kFast, E::NegativeLimitOn, Then::Stop},
+                                       {kPos, kSlow, E::NegativeLimitOff, Then::Home}};
+    case 18:
+      return std::vector<HomingSearch>{{kPos, kFast, E::PositiveLimitOn, Then::Stop},
+                                       {kNeg, kSlow, E::PositiveLimitOff, Then::Home}};
     // Home switch: positive (active on the positive side) for 3, 4, 19, 20, negative for
     // 5, 6, 21, 22; the home position left (3, 6, 19, 22) or right (4, 5, 20, 21) of its edge.
     case 3: return home_switch_plan(kPos, kNeg, true, home_active);

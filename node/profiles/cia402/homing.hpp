@@ -38,8 +38,8 @@ struct HomingSearch {
     Continue,  // the next search at once, in the same motion (same direction and speed)
     Home,      // the home position: stop on this step
   };
-  int direction = +1;   // +1 positive, -1 negative
-  bool fast = true;     // 6099h:1 "speed during search for switch", else :2 "for zero"
+  int direction = +1;  // +1 positive, -1 negative
+  bool fast = true;    // 6099h:1 "speed during search for switch", else :2 "for zero"
   HomingEvent until = HomingEvent::HomeOn;
   Then then = Then::Home;
   // The limit switch in the direction of travel, reached before `until`, reverses the

@@ -58,7 +58,8 @@ struct AxisTable {
   unsigned a;
 
   std::string name(const char* what) const { return "Axis " + std::to_string(a + 1) + " " + what; }
-  Entry& var(uint16_t base, const char* what, DT type, od::Access access, Bytes value, bool pdo = false) {
+  Entry& var(uint16_t base, const char* what, DT type, od::Access access, Bytes value,
+             bool pdo = false) {
     return od.var(obj::index(a, base), name(what), type, access, std::move(value), pdo);
   }
   Object& array(uint16_t base, const char* what) {
@@ -78,27 +79,34 @@ struct AxisTable {
 void add_device_control(AxisTable t) {
   using namespace obj;
   // 6007h: 0 no action, 1 fault signal, 2 disable voltage, 3 quick stop; default 1.
-  limits<int16_t>(t.var(kAbortConnectionOption, "Abort connection option code", DT::Integer16, RW, i16(1)),
-                  0, 3);
+  limits<int16_t>(
+      t.var(kAbortConnectionOption, "Abort connection option code", DT::Integer16, RW, i16(1)), 0,
+      3);
   t.var(kErrorCode, "Error code", DT::Unsigned16, RO, u16(0), kPdo);
   command(t.var(kControlword, "Controlword", DT::Unsigned16, RW, u16(0), kPdo));
   // Until the service has run transitions 0 and 1: Not ready to switch on, remote (bit 9).
   t.var(kStatusword, "Statusword", DT::Unsigned16, RO, u16(0x0200), kPdo);
-  limits<int16_t>(t.var(kQuickStopOption, "Quick stop option code", DT::Integer16, RW, i16(2)), 0, 8);
+  limits<int16_t>(t.var(kQuickStopOption, "Quick stop option code", DT::Integer16, RW, i16(2)), 0,
+                  8);
   limits<int16_t>(t.var(kShutdownOption, "Shutdown option code", DT::Integer16, RW, i16(0)), 0, 1);
-  limits<int16_t>(t.var(kDisableOperationOption, "Disable operation option code", DT::Integer16, RW, i16(1)),
-                  0, 1);
-  limits<int16_t>(t.var(kHaltOption, "Halt option code", DT::Integer16, RW, i16(1)), 1, 4);  // 0 is reserved
-  limits<int16_t>(t.var(kFaultReactionOption, "Fault reaction option code", DT::Integer16, RW, i16(2)), 0, 4);
+  limits<int16_t>(
+      t.var(kDisableOperationOption, "Disable operation option code", DT::Integer16, RW, i16(1)), 0,
+      1);
+  limits<int16_t>(t.var(kHaltOption, "Halt option code", DT::Integer16, RW, i16(1)), 1,
+                  4);  // 0 is reserved
+  limits<int16_t>(
+      t.var(kFaultReactionOption, "Fault reaction option code", DT::Integer16, RW, i16(2)), 0, 4);
   // 6060h: the master selects the mode for its session, so it is not stored; 0 (no mode
   // assigned) until it does (the standard leaves the default to the vendor).
-  Entry& modes =
-      command(t.var(kModesOfOperation, "Modes of operation", DT::Integer8, RW, i8(mode::kNone), kPdo));
+  Entry& modes = command(
+      t.var(kModesOfOperation, "Modes of operation", DT::Integer8, RW, i8(mode::kNone), kPdo));
   modes.validate = [](std::span<const uint8_t> data) {
     return mode_supported(od::decode<int8_t>(data)) ? SdoAbort::None : SdoAbort::InvalidValue;
   };
-  t.var(kModesOfOperationDisplay, "Modes of operation display", DT::Integer8, RO, i8(mode::kNone), kPdo);
-  t.var(kSupportedDriveModes, "Supported drive modes", DT::Unsigned32, RO, u32(kSupportedDriveModesValue));
+  t.var(kModesOfOperationDisplay, "Modes of operation display", DT::Integer8, RO, i8(mode::kNone),
+        kPdo);
+  t.var(kSupportedDriveModes, "Supported drive modes", DT::Unsigned32, RO,
+        u32(kSupportedDriveModesValue));
   t.var(kSingleDeviceType, "Single device type", DT::Unsigned32, RO, u32(kDeviceTypeStepper));
 }
 
@@ -107,10 +115,12 @@ void add_device_control(AxisTable t) {
 void add_position_objects(AxisTable t) {
   using namespace obj;
   sampled(t.var(kPositionDemand, "Position demand value", DT::Integer32, RO, i32(0), kPdo));
-  sampled(t.var(kPositionActualInternal, "Position actual internal value", DT::Integer32, RO, i32(0), kPdo));
+  sampled(t.var(kPositionActualInternal, "Position actual internal value", DT::Integer32, RO,
+                i32(0), kPdo));
   sampled(t.var(kPositionActual, "Position actual value", DT::Integer32, RO, i32(0), kPdo));
   sampled(t.var(kVelocityActual, "Velocity actual value", DT::Integer32, RO, i32(0), kPdo));
-  sampled(t.var(kFollowingErrorActual, "Following error actual value", DT::Integer32, RO, i32(0), kPdo));
+  sampled(t.var(kFollowingErrorActual, "Following error actual value", DT::Integer32, RO, i32(0),
+                kPdo));
   // Vendor defaults: the following error check off (FFFFFFFFh, as the standard codes it: an
   // open-loop stepper's actual position is its demand) and a position window of 0 (a target
   // is reached on its step).
@@ -126,8 +136,10 @@ void add_position_objects(AxisTable t) {
   t.var(kHomeOffset, "Home offset", DT::Integer32, RW, i32(0));
   // 607Dh: vendor default the whole range, i.e. no software limit in effect.
   Object& lim = t.array(kSoftwarePositionLimit, "Software position limit");
-  lim.add(limit_sub::kMin, "Min position limit", DT::Integer32, RW, i32(std::numeric_limits<int32_t>::min()));
-  lim.add(limit_sub::kMax, "Max position limit", DT::Integer32, RW, i32(std::numeric_limits<int32_t>::max()));
+  lim.add(limit_sub::kMin, "Min position limit", DT::Integer32, RW,
+          i32(std::numeric_limits<int32_t>::min()));
+  lim.add(limit_sub::kMax, "Max position limit", DT::Integer32, RW,
+          i32(std::numeric_limits<int32_t>::max()));
   t.var(kDigitalInputs, "Digital inputs", DT::Unsigned32, RO, u32(0), kPdo);
 }
 
@@ -143,12 +155,15 @@ void add_profile_objects(AxisTable t) {
   t.var(kQuickStopDeceleration, "Quick stop deceleration", DT::Unsigned32, RW, u32(10'000));
   // 6086h: 0 linear ramp (trapezoidal profile) and 3, DSP 402 V2.0's jerk-limited ramp
   // (S-curve, PP and PV); 1 sin^2 ramp and 2 jerk-free ramp are not offered (0x06090030).
-  one_of<int16_t>(t.var(kMotionProfileType, "Motion profile type", DT::Integer16, RW, i16(0)), {0, 3});
+  one_of<int16_t>(t.var(kMotionProfileType, "Motion profile type", DT::Integer16, RW, i16(0)),
+                  {0, 3});
   // 60A4h: the jerks of the S-curve in steps/s^3, every UNSIGNED32 honoured (0: the jerk is
   // not limited, that phase takes no time); vendor default 10 000.
   Object& jerk = t.array(kProfileJerk, "Profile jerk");
-  jerk.add(jerk_sub::kBeginAcceleration, "Begin acceleration jerk", DT::Unsigned32, RW, u32(10'000));
-  jerk.add(jerk_sub::kBeginDeceleration, "Begin deceleration jerk", DT::Unsigned32, RW, u32(10'000));
+  jerk.add(jerk_sub::kBeginAcceleration, "Begin acceleration jerk", DT::Unsigned32, RW,
+           u32(10'000));
+  jerk.add(jerk_sub::kBeginDeceleration, "Begin deceleration jerk", DT::Unsigned32, RW,
+           u32(10'000));
   jerk.add(jerk_sub::kEndAcceleration, "End acceleration jerk", DT::Unsigned32, RW, u32(10'000));
   jerk.add(jerk_sub::kEndDeceleration, "End deceleration jerk", DT::Unsigned32, RW, u32(10'000));
   // 6098h: 0 (no homing method assigned) by default; the methods the standard defines: 1..35
@@ -157,11 +172,13 @@ void add_profile_objects(AxisTable t) {
   std::vector<int8_t> methods{0, 37};
   for (int8_t m = 1; m <= 35; ++m)
     if (m != 15 && m != 16 && m != 31 && m != 32) methods.push_back(m);
-  one_of<int8_t>(t.var(kHomingMethod, "Homing method", DT::Integer8, RW, i8(0)), std::move(methods));
+  one_of<int8_t>(t.var(kHomingMethod, "Homing method", DT::Integer8, RW, i8(0)),
+                 std::move(methods));
   Object& speeds = t.array(kHomingSpeeds, "Homing speeds");
   speeds.add(homing_speed_sub::kSwitchSearch, "Speed during search for switch", DT::Unsigned32, RW,
              u32(1'000));
-  speeds.add(homing_speed_sub::kZeroSearch, "Speed during search for zero", DT::Unsigned32, RW, u32(100));
+  speeds.add(homing_speed_sub::kZeroSearch, "Speed during search for zero", DT::Unsigned32, RW,
+             u32(100));
   t.var(kHomingAcceleration, "Homing acceleration", DT::Unsigned32, RW, u32(1'000));
 }
 
@@ -174,15 +191,18 @@ void add_factor_and_ip_objects(AxisTable t) {
   t.ratio(kGearRatio, "Gear ratio", "Motor revolutions", "Shaft revolutions");
   t.ratio(kFeedConstant, "Feed constant", "Feed", "Shaft revolutions");
   // 60C0h: 0 linear interpolation, the only sub-mode the standard defines.
-  one_of<int16_t>(t.var(kInterpolationSubMode, "Interpolation sub mode select", DT::Integer16, RW, i16(0)),
-                  {0});
+  one_of<int16_t>(
+      t.var(kInterpolationSubMode, "Interpolation sub mode select", DT::Integer16, RW, i16(0)),
+      {0});
   Object& data = t.array(kInterpolationData, "Interpolation data record");
   command(data.add(ip_data_sub::kSetPoint, "Position set-point", DT::Integer32, RW, i32(0), kPdo));
   // 60C2h: the period is units * 10^index s, index -128..63; vendor default 1 ms (1, -3).
-  Object& period = t.od.record(obj::index(t.a, kInterpolationPeriod), t.name("Interpolation time period"));
+  Object& period =
+      t.od.record(obj::index(t.a, kInterpolationPeriod), t.name("Interpolation time period"));
   period.add(ip_period_sub::kUnits, "Interpolation time period value", DT::Unsigned8, RW, {1});
-  limits<int8_t>(period.add(ip_period_sub::kIndex, "Interpolation time index", DT::Integer8, RW, i8(-3)),
-                 -128, 63);
+  limits<int8_t>(
+      period.add(ip_period_sub::kIndex, "Interpolation time index", DT::Integer8, RW, i8(-3)), -128,
+      63);
 }
 
 }  // namespace
@@ -205,7 +225,9 @@ void add_objects(od::Dictionary& od, unsigned axes) {
 
 void set_default_pdos(od::Dictionary& od, unsigned a, unsigned first_rpdo, unsigned first_tpdo) {
   using namespace obj;
-  auto word = [a](uint16_t base, uint8_t bits) { return od::mapping_word(index(a, base), 0, bits); };
+  auto word = [a](uint16_t base, uint8_t bits) {
+    return od::mapping_word(index(a, base), 0, bits);
+  };
   auto rmap = [first_rpdo](unsigned k) { return od::rpdo_mapping(first_rpdo + k); };
   auto tmap = [first_tpdo](unsigned k) { return od::tpdo_mapping(first_tpdo + k); };
   od::set_default_mapping(od, rmap(0), {word(kControlword, 16), word(kModesOfOperation, 8)});

@@ -86,8 +86,9 @@ constexpr uint8_t kSwitchSearch = 1, kZeroSearch = 2;  // 6099h
 }
 namespace jerk_sub {
 // 60A4h as drives number it (Nanotec PD4 manual): the jerk at each end of the ramps.
-constexpr uint8_t kBeginAcceleration = 1, kBeginDeceleration = 2, kEndAcceleration = 3, kEndDeceleration = 4;
-}
+constexpr uint8_t kBeginAcceleration = 1, kBeginDeceleration = 2, kEndAcceleration = 3,
+                  kEndDeceleration = 4;
+}  // namespace jerk_sub
 namespace ip_data_sub {
 constexpr uint8_t kSetPoint = 1;  // 60C1h: the position set-point of linear interpolation
 }
@@ -128,6 +129,7 @@ void add_objects(od::Dictionary& dictionary, unsigned axes);
 // The default PDOs of `axis`: PDO numbers n (0-based: communication 0x1400 + n / 0x1800 + n,
 // mapping 0x1600 + n / 0x1A00 + n) first_rpdo {6040h, 6060h}, first_rpdo + 1 {607Ah, 60FFh},
 // first_tpdo {6041h, 6061h}, first_tpdo + 1 {6064h, 606Ch}. The PDO objects must exist.
-void set_default_pdos(od::Dictionary& dictionary, unsigned axis, unsigned first_rpdo, unsigned first_tpdo);
+void set_default_pdos(od::Dictionary& dictionary, unsigned axis, unsigned first_rpdo,
+                      unsigned first_tpdo);
 
 }  // namespace stepnode::cia402

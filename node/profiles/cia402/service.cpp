@@ -12,7 +12,9 @@ using namespace cia402::obj;
 namespace {
 
 uint32_t to_u32(int64_t v) { return static_cast<uint32_t>(std::clamp<int64_t>(v, 0, UINT32_MAX)); }
-int32_t to_i32(int64_t v) { return static_cast<int32_t>(std::clamp<int64_t>(v, INT32_MIN, INT32_MAX)); }
+int32_t to_i32(int64_t v) {
+  return static_cast<int32_t>(std::clamp<int64_t>(v, INT32_MIN, INT32_MAX));
+}
 
 }  // namespace
 
@@ -27,15 +29,18 @@ Cia402Service::Cia402Service(od::Dictionary& dictionary, AxisBank& axes, EmcyPro
 }
 
 void Cia402Service::install_hooks(unsigned a) {
-  auto entry = [this, a](uint16_t base, uint8_t sub = 0) -> od::Entry& { return dictionary_.at(index(a, base), sub); };
+  auto entry = [this, a](uint16_t base, uint8_t sub = 0) -> od::Entry& {
+    return dictionary_.at(index(a, base), sub);
+  };
   od::listen(entry(kControlword), [this, a] {
     load_targets(a);  // a target in the same RPDO is stored before this runs
     drives_[a]->controlword(dictionary_.get<uint16_t>(index(a, kControlword), 0), axes_.now());
     publish(a);
   });
   od::listen(entry(kModesOfOperation), [this, a] {
-    drives_[a]->set_mode(static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)),
-                         axes_.now());
+    drives_[a]->set_mode(
+        static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)),
+        axes_.now());
     publish(a);
   });
   od::listen(entry(kTargetPosition), [this, a] { load_targets(a); });
@@ -45,30 +50,37 @@ void Cia402Service::install_hooks(unsigned a) {
   });
   od::listen(entry(kTargetVelocity), [this, a] {
     drives_[a]->set_target_velocity(
-        to_i32(units_[a].to_steps(dictionary_.get<int32_t>(index(a, kTargetVelocity), 0))), axes_.now());
+        to_i32(units_[a].to_steps(dictionary_.get<int32_t>(index(a, kTargetVelocity), 0))),
+        axes_.now());
     publish(a);
   });
-  for (uint16_t base : {kMaxProfileVelocity, kProfileVelocity, kProfileAcceleration, kProfileDeceleration,
-                        kQuickStopDeceleration, kPositionWindow, kPositionWindowTime, kHomingMethod,
-                        kHomingAcceleration, kHomeOffset, kFollowingErrorWindow, kFollowingErrorTimeout,
-                        kMotionProfileType})
+  for (uint16_t base : {kMaxProfileVelocity, kProfileVelocity, kProfileAcceleration,
+                        kProfileDeceleration, kQuickStopDeceleration, kPositionWindow,
+                        kPositionWindowTime, kHomingMethod, kHomingAcceleration, kHomeOffset,
+                        kFollowingErrorWindow, kFollowingErrorTimeout, kMotionProfileType})
     od::listen(entry(base), [this, a] { load_parameters(a); });
-  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio, kFeedConstant, kHomingSpeeds,
-                        kInterpolationPeriod})
-    for (uint8_t sub : {uint8_t{1}, uint8_t{2}}) od::listen(entry(base, sub), [this, a] { load_parameters(a); });
-  for (uint8_t sub = 1; sub <= 4; ++sub) od::listen(entry(kProfileJerk, sub), [this, a] { load_parameters(a); });
-  for (uint16_t base : {kQuickStopOption, kShutdownOption, kDisableOperationOption, kHaltOption, kFaultReactionOption})
+  for (uint16_t base : {kSoftwarePositionLimit, kPositionEncoderResolution, kGearRatio,
+                        kFeedConstant, kHomingSpeeds, kInterpolationPeriod})
+    for (uint8_t sub : {uint8_t{1}, uint8_t{2}})
+      od::listen(entry(base, sub), [this, a] { load_parameters(a); });
+  for (uint8_t sub = 1; sub <= 4; ++sub)
+    od::listen(entry(kProfileJerk, sub), [this, a] { load_parameters(a); });
+  for (uint16_t base : {kQuickStopOption, kShutdownOption, kDisableOperationOption, kHaltOption,
+                        kFaultReactionOption})
     od::listen(entry(base), [this, a] { load_options(a); });
 }
 
 void Cia402Service::load_parameters(unsigned a) {
-  auto u32 = [&](uint16_t base, uint8_t sub = 0) { return dictionary_.get<uint32_t>(index(a, base), sub); };
-  units_[a] = cia402::UserUnits(u32(kPositionEncoderResolution, cia402::encoder_sub::kIncrements),
-                                u32(kPositionEncoderResolution, cia402::encoder_sub::kMotorRevolutions),
-                                u32(kGearRatio, cia402::gear_sub::kMotorRevolutions),
-                                u32(kGearRatio, cia402::gear_sub::kShaftRevolutions),
-                                u32(kFeedConstant, cia402::feed_sub::kFeed),
-                                u32(kFeedConstant, cia402::feed_sub::kShaftRevolutions));
+  auto u32 = [&](uint16_t base, uint8_t sub = 0) {
+    return dictionary_.get<uint32_t>(index(a, base), sub);
+  };
+  units_[a] =
+      cia402::UserUnits(u32(kPositionEncoderResolution, cia402::encoder_sub::kIncrements),
+                        u32(kPositionEncoderResolution, cia402::encoder_sub::kMotorRevolutions),
+                        u32(kGearRatio, cia402::gear_sub::kMotorRevolutions),
+                        u32(kGearRatio, cia402::gear_sub::kShaftRevolutions),
+                        u32(kFeedConstant, cia402::feed_sub::kFeed),
+                        u32(kFeedConstant, cia402::feed_sub::kShaftRevolutions));
   const cia402::UserUnits& un = units_[a];
   cia402::Parameters& p = drives_[a]->parameters();
   p.max_velocity = to_u32(un.to_steps(u32(kMaxProfileVelocity)));
@@ -77,29 +89,39 @@ void Cia402Service::load_parameters(unsigned a) {
   p.deceleration = to_u32(un.to_steps(u32(kProfileDeceleration)));
   p.quick_stop_deceleration = to_u32(un.to_steps(u32(kQuickStopDeceleration)));
   p.motion_profile_type = dictionary_.get<int16_t>(index(a, kMotionProfileType), 0);
-  for (uint8_t sub = 1; sub <= 4; ++sub) p.jerk[sub - 1] = to_u32(un.to_steps(u32(kProfileJerk, sub)));
+  for (uint8_t sub = 1; sub <= 4; ++sub)
+    p.jerk[sub - 1] = to_u32(un.to_steps(u32(kProfileJerk, sub)));
   p.position_window = to_u32(un.to_steps(u32(kPositionWindow)));
   p.position_window_time_ms = dictionary_.get<uint16_t>(index(a, kPositionWindowTime), 0);
-  const int32_t low = dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMin);
-  const int32_t high = dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMax);
+  const int32_t low =
+      dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMin);
+  const int32_t high =
+      dictionary_.get<int32_t>(index(a, kSoftwarePositionLimit), cia402::limit_sub::kMax);
   p.min_position_limit = to_i32(un.to_steps(low));
   p.max_position_limit = to_i32(un.to_steps(high));
   p.homing_method = dictionary_.get<int8_t>(index(a, kHomingMethod), 0);
-  p.homing_switch_speed = to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kSwitchSearch)));
-  p.homing_zero_speed = to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch)));
+  p.homing_switch_speed =
+      to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kSwitchSearch)));
+  p.homing_zero_speed =
+      to_u32(un.to_steps(u32(kHomingSpeeds, cia402::homing_speed_sub::kZeroSearch)));
   p.homing_acceleration = to_u32(un.to_steps(u32(kHomingAcceleration)));
   p.home_offset = to_i32(un.to_steps(dictionary_.get<int32_t>(index(a, kHomeOffset), 0)));
   const uint32_t fe_window = u32(kFollowingErrorWindow);
   p.following_error_window = fe_window == UINT32_MAX ? UINT32_MAX : to_u32(un.to_steps(fe_window));
   p.following_error_timeout_ms = dictionary_.get<uint16_t>(index(a, kFollowingErrorTimeout), 0);
   // 60C2h: units * 10^index s.
-  double period = dictionary_.get<uint8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kUnits);
-  for (int8_t i = dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex); i < 0; ++i)
+  double period =
+      dictionary_.get<uint8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kUnits);
+  for (int8_t i =
+           dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex);
+       i < 0; ++i)
     period /= 10;
-  for (int8_t i = dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex); i > 0; --i)
+  for (int8_t i =
+           dictionary_.get<int8_t>(index(a, kInterpolationPeriod), cia402::ip_period_sub::kIndex);
+       i > 0; --i)
     period *= 10;
-  p.interpolation_period = std::clamp<motion::Tick>(static_cast<motion::Tick>(period * motion::kClockHz), 1,
-                                                    motion::kClockHz);
+  p.interpolation_period = std::clamp<motion::Tick>(
+      static_cast<motion::Tick>(period * motion::kClockHz), 1, motion::kClockHz);
 }
 
 void Cia402Service::load_options(unsigned a) {
@@ -128,8 +150,9 @@ void Cia402Service::configure(uint64_t) {
 void Cia402Service::power_up(uint64_t) {
   for (unsigned a = 0; a < drives_.size(); ++a) {
     drives_[a]->power_up(axes_.now());
-    drives_[a]->set_mode(static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)),
-                         axes_.now());
+    drives_[a]->set_mode(
+        static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)),
+        axes_.now());
     // Commands and targets are not stored: the master writes them after every start.
     dictionary_.put<uint16_t>(index(a, kControlword), 0, 0);
     if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us());
@@ -140,7 +163,8 @@ void Cia402Service::power_up(uint64_t) {
 
 void Cia402Service::master_lost(uint64_t) {
   for (unsigned a = 0; a < drives_.size(); ++a) {
-    drives_[a]->connection_lost(dictionary_.get<int16_t>(index(a, kAbortConnectionOption), 0), axes_.now());
+    drives_[a]->connection_lost(dictionary_.get<int16_t>(index(a, kAbortConnectionOption), 0),
+                                axes_.now());
     publish(a);
   }
 }
@@ -171,12 +195,14 @@ void Cia402Service::publish(unsigned a) {
   const cia402::Drive& d = *drives_[a];
   const cia402::UserUnits& un = units_[a];
   dictionary_.put<uint16_t>(index(a, kStatusword), 0, d.statusword());
-  dictionary_.put<int8_t>(index(a, kModesOfOperationDisplay), 0, static_cast<int8_t>(d.mode_display()));
+  dictionary_.put<int8_t>(index(a, kModesOfOperationDisplay), 0,
+                          static_cast<int8_t>(d.mode_display()));
   dictionary_.put<int32_t>(index(a, kPositionDemand), 0, to_i32(un.to_units(d.position_demand())));
   dictionary_.put<int32_t>(index(a, kPositionActualInternal), 0, d.position_actual());
   dictionary_.put<int32_t>(index(a, kPositionActual), 0, to_i32(un.to_units(d.position_actual())));
   dictionary_.put<int32_t>(index(a, kVelocityActual), 0, to_i32(un.to_units(d.velocity_actual())));
-  dictionary_.put<int32_t>(index(a, kFollowingErrorActual), 0, to_i32(un.to_units(d.following_error())));
+  dictionary_.put<int32_t>(index(a, kFollowingErrorActual), 0,
+                           to_i32(un.to_units(d.following_error())));
   dictionary_.put<uint32_t>(index(a, kDigitalInputs), 0, d.digital_inputs());
   dictionary_.put<uint16_t>(index(a, kErrorCode), 0, d.error_code());
   report_fault(a);
@@ -192,8 +218,8 @@ void Cia402Service::report_fault(unsigned a) {
   if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us());
   reported_[a] = code;
   if (code)
-    emcy_.raise(code, error_bits::kGeneric | error_bits::kProfile, {static_cast<uint8_t>(a + 1), 0, 0, 0, 0},
-                axes_.now_us());
+    emcy_.raise(code, error_bits::kGeneric | error_bits::kProfile,
+                {static_cast<uint8_t>(a + 1), 0, 0, 0, 0}, axes_.now_us());
 }
 
 }  // namespace stepnode::node

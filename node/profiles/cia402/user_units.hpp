@@ -12,8 +12,8 @@ class UserUnits {
  public:
   UserUnits() = default;
   // All six terms >= 1 (the objects refuse 0).
-  UserUnits(uint32_t increments, uint32_t motor_revs, uint32_t gear_motor, uint32_t gear_shaft, uint32_t feed,
-            uint32_t feed_shaft) {
+  UserUnits(uint32_t increments, uint32_t motor_revs, uint32_t gear_motor, uint32_t gear_shaft,
+            uint32_t feed, uint32_t feed_shaft) {
     __int128 n = static_cast<__int128>(increments) * gear_motor * feed_shaft;
     __int128 d = static_cast<__int128>(motor_revs) * gear_shaft * feed;
     // Reduced, so the common 1:1 case (and ratios of small numbers) stay exact integers.
@@ -23,8 +23,12 @@ class UserUnits {
     units_ = static_cast<int64_t>(d) / g;
   }
   // Rounded to the nearest step (half away from zero).
-  int64_t to_steps(int64_t units) const { return div_round(static_cast<__int128>(units) * steps_, units_); }
-  int64_t to_units(int64_t steps) const { return div_round(static_cast<__int128>(steps) * units_, steps_); }
+  int64_t to_steps(int64_t units) const {
+    return div_round(static_cast<__int128>(units) * steps_, units_);
+  }
+  int64_t to_units(int64_t steps) const {
+    return div_round(static_cast<__int128>(steps) * units_, steps_);
+  }
   int64_t steps_per() const { return steps_; }
   int64_t units_per() const { return units_; }
 

@@ -27,21 +27,21 @@ constexpr uint16_t kMoving = 1u << 15;         // %I16
 
 // %Q1..%Q16 as bits 0..15 of the command word.
 namespace command {
-constexpr uint16_t kSelectAxis1 = 1u << 0;   // %Q1
-constexpr uint16_t kSelectAxis2 = 1u << 1;   // %Q2
-constexpr uint16_t kSelectAxis3 = 1u << 2;   // %Q3
-constexpr uint16_t kFindHomeUp = 1u << 3;    // %Q4
-constexpr uint16_t kFindHomeDown = 1u << 4;  // %Q5
-constexpr uint16_t kJogUp = 1u << 5;         // %Q6 (level)
-constexpr uint16_t kJogDown = 1u << 6;       // %Q7 (level)
-constexpr uint16_t kMoveRelative = 1u << 7;  // %Q8
-constexpr uint16_t kMoveAbsolute = 1u << 8;  // %Q9
-constexpr uint16_t kResumeMove = 1u << 9;    // %Q10
-constexpr uint16_t kMoveIndexed = 1u << 10;  // %Q11 (STP113 / STP100)
-constexpr uint16_t kRepeatMove = 1u << 11;   // %Q12 (STP100, level)
-constexpr uint16_t kSetPosition = 1u << 12;  // %Q13
-constexpr uint16_t kClearErrors = 1u << 13;  // %Q14
-constexpr uint16_t kDecelStop = 1u << 14;    // %Q15
+constexpr uint16_t kSelectAxis1 = 1u << 0;     // %Q1
+constexpr uint16_t kSelectAxis2 = 1u << 1;     // %Q2
+constexpr uint16_t kSelectAxis3 = 1u << 2;     // %Q3
+constexpr uint16_t kFindHomeUp = 1u << 3;      // %Q4
+constexpr uint16_t kFindHomeDown = 1u << 4;    // %Q5
+constexpr uint16_t kJogUp = 1u << 5;           // %Q6 (level)
+constexpr uint16_t kJogDown = 1u << 6;         // %Q7 (level)
+constexpr uint16_t kMoveRelative = 1u << 7;    // %Q8
+constexpr uint16_t kMoveAbsolute = 1u << 8;    // %Q9
+constexpr uint16_t kResumeMove = 1u << 9;      // %Q10
+constexpr uint16_t kMoveIndexed = 1u << 10;    // %Q11 (STP113 / STP100)
+constexpr uint16_t kRepeatMove = 1u << 11;     // %Q12 (STP100, level)
+constexpr uint16_t kSetPosition = 1u << 12;    // %Q13
+constexpr uint16_t kClearErrors = 1u << 13;    // %Q14
+constexpr uint16_t kDecelStop = 1u << 14;      // %Q15
 constexpr uint16_t kImmediateStop = 1u << 15;  // %Q16
 }  // namespace command
 

@@ -29,8 +29,8 @@ inline uint16_t index(unsigned axis, uint16_t offset) {
 
 // Sub-indices of the records.
 namespace profile_sub {
-constexpr uint8_t kVelocityDivisor = 1, kBaseVelocity = 2, kRunningVelocity = 3,
-                  kAcceleration = 4, kDeceleration = 5;
+constexpr uint8_t kVelocityDivisor = 1, kBaseVelocity = 2, kRunningVelocity = 3, kAcceleration = 4,
+                  kDeceleration = 5;
 }
 namespace indexed_sub {
 constexpr uint8_t kDestination = 1, kDeceleration = 2, kWindowOpen = 3, kWindowClose = 4;
@@ -38,8 +38,8 @@ constexpr uint8_t kDestination = 1, kDeceleration = 2, kWindowOpen = 3, kWindowC
 namespace config_sub {
 constexpr uint8_t kEncoderType = 1, kMultiplier = 2, kDivisor = 3, kTolerance = 4,
                   kStallDetection = 5, kHomeMethod = 6, kOriginSource = 7, kLimitQualified = 8,
-                  kLimitStartedMoves = 9, kIndexedMoves = 10, kModuleModel = 11, kQuadratureDecoding = 12,
-                  kStpcalcPeakShortMoves = 13, kDirectionSetup = 14;
+                  kLimitStartedMoves = 9, kIndexedMoves = 10, kModuleModel = 11,
+                  kQuadratureDecoding = 12, kStpcalcPeakShortMoves = 13, kDirectionSetup = 14;
 }
 
 // The axis' PDOs: RPDO/TPDO numbers 4a+1..4a+4 (0x1400/0x1800 + 4a + k). The fourth TPDO

@@ -18,9 +18,11 @@ T as(uint64_t raw) {
 RefusedWords::RefusedWords(od::Dictionary& dictionary, unsigned a) : axis_(a) {
   using namespace horner::obj;
   watch(dictionary.at(index(a, kDestination), 0));
-  for (uint8_t sub = horner::profile_sub::kVelocityDivisor; sub <= horner::profile_sub::kDeceleration; ++sub)
+  for (uint8_t sub = horner::profile_sub::kVelocityDivisor;
+       sub <= horner::profile_sub::kDeceleration; ++sub)
     watch(dictionary.at(index(a, kProfile), sub));
-  for (uint8_t sub = horner::indexed_sub::kDestination; sub <= horner::indexed_sub::kWindowClose; ++sub)
+  for (uint8_t sub = horner::indexed_sub::kDestination; sub <= horner::indexed_sub::kWindowClose;
+       ++sub)
     watch(dictionary.at(index(a, kIndexedMove), sub));
 }
 

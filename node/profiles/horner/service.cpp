@@ -42,9 +42,10 @@ void HornerService::load_config(unsigned a) {
   cfg.encoder_tolerance = u8(horner::config_sub::kTolerance);
   cfg.stall_detection = u8(horner::config_sub::kStallDetection) != 0;
   cfg.home_method = u8(horner::config_sub::kHomeMethod) ? motion::AxisConfig::HomeMethod::Simple
-                                                    : motion::AxisConfig::HomeMethod::Normal;
-  cfg.origin_source = u8(horner::config_sub::kOriginSource) ? motion::AxisConfig::OriginSource::Marker
-                                                        : motion::AxisConfig::OriginSource::HomeSwitch;
+                                                        : motion::AxisConfig::HomeMethod::Normal;
+  cfg.origin_source = u8(horner::config_sub::kOriginSource)
+                          ? motion::AxisConfig::OriginSource::Marker
+                          : motion::AxisConfig::OriginSource::HomeSwitch;
   cfg.limit_qualified_home = u8(horner::config_sub::kLimitQualified) != 0;
   cfg.limit_started_moves = u8(horner::config_sub::kLimitStartedMoves) != 0;
   cfg.indexed_moves = u8(horner::config_sub::kIndexedMoves) != 0;
@@ -54,7 +55,8 @@ void HornerService::load_config(unsigned a) {
   cfg.stpcalc_peak_short_moves = u8(horner::config_sub::kStpcalcPeakShortMoves) != 0;
   cfg.direction_setup_us = dictionary_.get<uint16_t>(c, horner::config_sub::kDirectionSetup);
   axes_.axis(a).set_config(cfg);
-  axes_.machine().axes[a].config().encoder = cfg.encoder;  // the encoder is on the axis' first motor
+  axes_.machine().axes[a].config().encoder =
+      cfg.encoder;  // the encoder is on the axis' first motor
 }
 
 void HornerService::install_hooks() {
@@ -63,7 +65,8 @@ void HornerService::install_hooks() {
     // for the next move as soon as a command was taken).
     od::listen(dictionary_.at(index(a, kCommandBits), 0), [this, a] {
       load_words(a);
-      axes_.axis(a).write_commands(dictionary_.get<uint16_t>(index(a, kCommandBits), 0), axes_.now());
+      axes_.axis(a).write_commands(dictionary_.get<uint16_t>(index(a, kCommandBits), 0),
+                                   axes_.now());
       publish(a);
     });
     for (auto& [sub, e] : dictionary_.object(index(a, kConfiguration))->entries)

@@ -38,8 +38,9 @@ HpService::HpService(od::Dictionary& dictionary, AxisBank& axes, EmcyProducer& e
       uint8_t condition = 0;
       for (uint8_t b = event; b; b >>= 1) ++condition;
       if (condition >= 3)
-        emcy_.report(static_cast<uint16_t>(hp44714a::kInterruptEmcyBase + condition), error_bits::kManufacturer,
-                     {event, static_cast<uint8_t>(a + 1), 0, 0, 0}, axes_.now_us());
+        emcy_.report(static_cast<uint16_t>(hp44714a::kInterruptEmcyBase + condition),
+                     error_bits::kManufacturer, {event, static_cast<uint8_t>(a + 1), 0, 0, 0},
+                     axes_.now_us());
     };
     install_hooks(a);
   }
@@ -60,7 +61,8 @@ SdoAbort HpService::result(unsigned a, hp::Error e) {
   return SdoAbort::DeviceState;
 }
 
-void HpService::hook(unsigned a, uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+void HpService::hook(unsigned a, uint16_t offset, uint8_t sub,
+                     std::function<SdoAbort(std::span<const uint8_t>)> f) {
   // A command is a write: it acts once the value is stored (for an RPDO, once the whole
   // PDO is), on the stored value; a refusal puts the previous value back and is the abort.
   od::Entry& entry = dictionary_.at(index(a, offset), sub);
@@ -80,17 +82,20 @@ void HpService::install_hooks(unsigned a) {
 // PROFILE, PSCALE, MOVE, SUSTAIN, TRIG, DELAY.
 void HpService::install_command_hooks(unsigned a) {
   hp::Channel& ch = *channels_[a];
-  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+  auto hook = [this, a](uint16_t offset, uint8_t sub,
+                        std::function<SdoAbort(std::span<const uint8_t>)> f) {
     this->hook(a, offset, sub, std::move(f));
   };
   // PROFILE: subs 1-5 are staged; writing 1 to sub 6 gives the PROFILE command.
   hook(kProfile, hp44714a::profile_sub::kApply, [this, a, &ch](std::span<const uint8_t> d) {
     if (u8(d) != 1) return SdoAbort::None;
     uint16_t p = index(a, kProfile);
-    hp::Profile prof{static_cast<hp::ProfileMode>(dictionary_.get<uint8_t>(p, hp44714a::profile_sub::kMode)),
-                     dictionary_.get<double>(p, hp44714a::profile_sub::kMin), dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
-                     dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
-                     dictionary_.get<double>(p, hp44714a::profile_sub::kLast)};
+    hp::Profile prof{
+        static_cast<hp::ProfileMode>(dictionary_.get<uint8_t>(p, hp44714a::profile_sub::kMode)),
+        dictionary_.get<double>(p, hp44714a::profile_sub::kMin),
+        dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
+        dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
+        dictionary_.get<double>(p, hp44714a::profile_sub::kLast)};
     hp::Error e = hp::Error::None;
     hp::Conflict c = ch.profile(prof, now(), &e);
     if (e != hp::Error::None) return result(a, e);
@@ -101,15 +106,20 @@ void HpService::install_command_hooks(unsigned a) {
     if (s == 0 || !std::isfinite(s)) return SdoAbort::InvalidValue;
     return result(a, ch.pscale(s));
   });
-  auto nowait = [this, a] { return dictionary_.get<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait) != 0; };
+  auto nowait = [this, a] {
+    return dictionary_.get<uint8_t>(index(a, kMove), hp44714a::move_sub::kNowait) != 0;
+  };
   hook(kMove, hp44714a::move_sub::kRelative, [this, a, &ch, nowait](std::span<const uint8_t> d) {
-    return move_in_range(ch, real(d), false) ? result(a, ch.move(real(d), false, nowait(), now())) : SdoAbort::InvalidValue;
+    return move_in_range(ch, real(d), false) ? result(a, ch.move(real(d), false, nowait(), now()))
+                                             : SdoAbort::InvalidValue;
   });
   hook(kMove, hp44714a::move_sub::kAbsolute, [this, a, &ch, nowait](std::span<const uint8_t> d) {
-    return move_in_range(ch, real(d), true) ? result(a, ch.move(real(d), true, nowait(), now())) : SdoAbort::InvalidValue;
+    return move_in_range(ch, real(d), true) ? result(a, ch.move(real(d), true, nowait(), now()))
+                                            : SdoAbort::InvalidValue;
   });
   hook(kSustain, 0, [this, a, &ch, nowait](std::span<const uint8_t> d) {
-    return std::isfinite(real(d)) ? result(a, ch.sustain(real(d), nowait(), now())) : SdoAbort::InvalidValue;
+    return std::isfinite(real(d)) ? result(a, ch.sustain(real(d), nowait(), now()))
+                                  : SdoAbort::InvalidValue;
   });
   hook(kTrig, 0, [this, a, &ch](std::span<const uint8_t> d) {
     return result(a, ch.trig(static_cast<hp::TrigMode>(u8(d)), now()));
@@ -126,31 +136,37 @@ void HpService::install_command_hooks(unsigned a) {
 // STANDBY, PULSE, HARDLIM, HALT.
 void HpService::install_output_hooks(unsigned a) {
   hp::Channel& ch = *channels_[a];
-  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+  auto hook = [this, a](uint16_t offset, uint8_t sub,
+                        std::function<SdoAbort(std::span<const uint8_t>)> f) {
     this->hook(a, offset, sub, std::move(f));
   };
   uint16_t out = index(a, kOutput);
   auto standby = [this, a, &ch](uint8_t mode, uint8_t sense) {
     return result(a, ch.standby(static_cast<hp::StandbyMode>(mode), sense != 0, now()));
   };
-  hook(kOutput, hp44714a::output_sub::kStandbyMode, [this, out, standby](std::span<const uint8_t> d) {
-    return standby(u8(d), dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbySense));
-  });
-  hook(kOutput, hp44714a::output_sub::kStandbySense, [this, out, standby](std::span<const uint8_t> d) {
-    return standby(dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbyMode), u8(d));
-  });
-  for (uint8_t sub : {hp44714a::output_sub::kPulseMode, hp44714a::output_sub::kPstpSense, hp44714a::output_sub::kNdirSense})
+  hook(kOutput, hp44714a::output_sub::kStandbyMode,
+       [this, out, standby](std::span<const uint8_t> d) {
+         return standby(u8(d), dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbySense));
+       });
+  hook(kOutput, hp44714a::output_sub::kStandbySense,
+       [this, out, standby](std::span<const uint8_t> d) {
+         return standby(dictionary_.get<uint8_t>(out, hp44714a::output_sub::kStandbyMode), u8(d));
+       });
+  for (uint8_t sub : {hp44714a::output_sub::kPulseMode, hp44714a::output_sub::kPstpSense,
+                      hp44714a::output_sub::kNdirSense})
     hook(kOutput, sub, [this, out, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(out, s); };
       ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(hp44714a::output_sub::kPulseMode)),
-                              get(hp44714a::output_sub::kPstpSense) != 0, get(hp44714a::output_sub::kNdirSense) != 0});
+                              get(hp44714a::output_sub::kPstpSense) != 0,
+                              get(hp44714a::output_sub::kNdirSense) != 0});
       return SdoAbort::None;
     });
   uint16_t lim = index(a, kLimits);
   for (uint8_t sub : {hp44714a::limits_sub::kPlimSense, hp44714a::limits_sub::kNlimSense})
     hook(kLimits, sub, [this, lim, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(lim, s); };
-      ch.hardlim(get(hp44714a::limits_sub::kPlimSense) != 0, get(hp44714a::limits_sub::kNlimSense) != 0);
+      ch.hardlim(get(hp44714a::limits_sub::kPlimSense) != 0,
+                 get(hp44714a::limits_sub::kNlimSense) != 0);
       return SdoAbort::None;
     });
   hook(kLimits, hp44714a::limits_sub::kHaltMode, [this, &ch](std::span<const uint8_t> d) {
@@ -167,13 +183,16 @@ void HpService::install_output_hooks(unsigned a) {
 void HpService::install_counter_hooks(unsigned a) {
   hp::Channel& ch = *channels_[a];
   od::Dictionary& od = dictionary_;
-  auto hook = [this, a](uint16_t offset, uint8_t sub, std::function<SdoAbort(std::span<const uint8_t>)> f) {
+  auto hook = [this, a](uint16_t offset, uint8_t sub,
+                        std::function<SdoAbort(std::span<const uint8_t>)> f) {
     this->hook(a, offset, sub, std::move(f));
   };
   hook(kPosition, 0, [this, a, &ch](std::span<const uint8_t> d) {
     return std::isfinite(real(d)) ? result(a, ch.pos(real(d))) : SdoAbort::InvalidValue;
   });
-  od.at(index(a, kPosition), 0).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.pos_query()); };
+  od.at(index(a, kPosition), 0).on_read = [&ch](od::Bytes& v) {
+    v = od::encode<double>(ch.pos_query());
+  };
   uint16_t q = index(a, kQuadrature);
   hook(kQuadrature, hp44714a::quad_sub::kQscale, [&ch](std::span<const uint8_t> d) {
     if (!std::isfinite(real(d))) return SdoAbort::InvalidValue;
@@ -187,7 +206,9 @@ void HpService::install_counter_hooks(unsigned a) {
   od.at(q, hp44714a::quad_sub::kQindex).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(static_cast<uint8_t>(ch.qindex_mode()));
   };
-  od.at(q, hp44714a::quad_sub::kQpos).on_read = [&ch](od::Bytes& v) { v = od::encode<double>(ch.qpos_query()); };
+  od.at(q, hp44714a::quad_sub::kQpos).on_read = [&ch](od::Bytes& v) {
+    v = od::encode<double>(ch.qpos_query());
+  };
   hook(kInterrupt, hp44714a::intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
     if (u8(d)) ch.enable_intr();
     else ch.disable_intr();
@@ -207,7 +228,8 @@ void HpService::install_counter_hooks(unsigned a) {
   uint16_t sim = sim_index(a);
   od::listen(od.at(sim, hp44714a::sim_sub::kHaltInputHigh), [this, a, sim] {
     // The simulated HALT switch is an input of the motor's port: the channel sees its edge.
-    axes_.machine().axes.at(a).set_halt_input(dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kHaltInputHigh) != 0);
+    axes_.machine().axes.at(a).set_halt_input(
+        dictionary_.get<uint8_t>(sim, hp44714a::sim_sub::kHaltInputHigh) != 0);
     axes_.advance(axes_.now_us());
     publish(a);
   });
@@ -223,15 +245,18 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3). One the
   // channel refuses (stored by a build with other limits) leaves the power-on profile, and
   // its objects show that one again; EMCY 0x5530 says a stored value was refused.
-  hp::Conflict c = ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, hp44714a::profile_sub::kMode)),
-                                          dictionary_.get<double>(p, hp44714a::profile_sub::kMin),
-                                          dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
-                                          dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
-                                          dictionary_.get<double>(p, hp44714a::profile_sub::kLast)},
-                              t);
+  hp::Conflict c =
+      ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, hp44714a::profile_sub::kMode)),
+                             dictionary_.get<double>(p, hp44714a::profile_sub::kMin),
+                             dictionary_.get<double>(p, hp44714a::profile_sub::kMax),
+                             dictionary_.get<double>(p, hp44714a::profile_sub::kSlope),
+                             dictionary_.get<double>(p, hp44714a::profile_sub::kLast)},
+                 t);
   if (c != hp::Conflict::None) {
-    spdlog::warn("stored PROFILE of HP channel {} is refused (conflict row {}); the power-on profile applies", a,
-                 static_cast<int>(c));
+    spdlog::warn(
+        "stored PROFILE of HP channel {} is refused (conflict row {}); the power-on profile "
+        "applies",
+        a, static_cast<int>(c));
     dictionary_.reset_to_defaults(p, p);
     emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
                  {static_cast<uint8_t>(p), static_cast<uint8_t>(p >> 8), 0, 1, 0}, axes_.now_us());
@@ -242,11 +267,14 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   ch.standby(static_cast<hp::StandbyMode>(g8(out, hp44714a::output_sub::kStandbyMode)),
              g8(out, hp44714a::output_sub::kStandbySense) != 0, t);
   ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(g8(out, hp44714a::output_sub::kPulseMode)),
-                          g8(out, hp44714a::output_sub::kPstpSense) != 0, g8(out, hp44714a::output_sub::kNdirSense) != 0});
-  ch.hardlim(g8(lim, hp44714a::limits_sub::kPlimSense) != 0, g8(lim, hp44714a::limits_sub::kNlimSense) != 0);
+                          g8(out, hp44714a::output_sub::kPstpSense) != 0,
+                          g8(out, hp44714a::output_sub::kNdirSense) != 0});
+  ch.hardlim(g8(lim, hp44714a::limits_sub::kPlimSense) != 0,
+             g8(lim, hp44714a::limits_sub::kNlimSense) != 0);
   ch.halt_mode(static_cast<hp::HaltMode>(g8(lim, hp44714a::limits_sub::kHaltMode)), t);
   ch.qscale(dictionary_.get<double>(index(a, kQuadrature), hp44714a::quad_sub::kQscale));
-  axes_.machine().axes.at(a).set_halt_input(g8(sim_index(a), hp44714a::sim_sub::kHaltInputHigh) != 0);
+  axes_.machine().axes.at(a).set_halt_input(g8(sim_index(a), hp44714a::sim_sub::kHaltInputHigh) !=
+                                            0);
   axes_.advance(axes_.now_us());
   ch.set_test_jumper(g8(sim_index(a), hp44714a::sim_sub::kTestJumper) != 0);
 }
@@ -264,17 +292,22 @@ void HpService::publish(unsigned a) {
   // In the simulation the STBY output drives motor power (issue 4): with STANDBY ON a
   // Horner move still counts its steps, but the load does not move.
   axes_.machine().axes.at(a).set_powered(ch.pulses_reach_powered_motor());
-  od.put<uint32_t>(out, hp44714a::output_sub::kPstpPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
-  od.put<uint32_t>(out, hp44714a::output_sub::kNdirPulses, static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
+  od.put<uint32_t>(out, hp44714a::output_sub::kPstpPulses,
+                   static_cast<uint32_t>(ch.pulses(hp::Output::Pstp)));
+  od.put<uint32_t>(out, hp44714a::output_sub::kNdirPulses,
+                   static_cast<uint32_t>(ch.pulses(hp::Output::Ndir)));
   od.put<double>(out, hp44714a::output_sub::kPulseWidth, ch.current_width());
-  od.put<uint32_t>(sim_index(a), hp44714a::sim_sub::kLastPulseWidthNs, axes_.machine().axes.at(a).last_pulse_width_ns());
+  od.put<uint32_t>(sim_index(a), hp44714a::sim_sub::kLastPulseWidthNs,
+                   axes_.machine().axes.at(a).last_pulse_width_ns());
   od.put<double>(index(a, kPosition), 0, ch.pos_query());
   od.put<int32_t>(index(a, kQuadrature), hp44714a::quad_sub::kCount, ch.quadrature_count());
   uint16_t t = index(a, kTiming);
   if (auto trig = ch.trigger_time()) {
-    od.put<uint32_t>(t, hp44714a::timing_sub::kTriggerUs, static_cast<uint32_t>(axes_.micros(*trig)));
+    od.put<uint32_t>(t, hp44714a::timing_sub::kTriggerUs,
+                     static_cast<uint32_t>(axes_.micros(*trig)));
     auto first = ch.first_step_time();
-    od.put<uint32_t>(t, hp44714a::timing_sub::kFirstStepUs, first ? static_cast<uint32_t>(axes_.micros(*first)) : 0);
+    od.put<uint32_t>(t, hp44714a::timing_sub::kFirstStepUs,
+                     first ? static_cast<uint32_t>(axes_.micros(*first)) : 0);
     od.put<int32_t>(t, hp44714a::timing_sub::kFirstStepAfterTriggerUs,
                     first ? static_cast<int32_t>(axes_.micros(*first) - axes_.micros(*trig)) : -1);
   }
@@ -288,7 +321,8 @@ uint64_t HpService::next_advance_us(uint64_t now_us) {
     // AUTO keeps the motor powered throughout and starts its power-off timer at the end.
     if (core.busy() && !core.owned_by(ch)) continue;
     const motion::hp::Done d = ch.done();
-    const bool auto_off_due = ch.standby_mode() == motion::hp::StandbyMode::Auto && ch.motor_powered();
+    const bool auto_off_due =
+        ch.standby_mode() == motion::hp::StandbyMode::Auto && ch.motor_powered();
     if (d == motion::hp::Done::Running || d == motion::hp::Done::SustainRunning || auto_off_due)
       return poll_deadline(now_us);
   }

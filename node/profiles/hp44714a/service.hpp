@@ -1,19 +1,19 @@
 // The HP 44714A profile in the node: connects the channels (node/motion/hp_channel.*) to
-// their objects (node/profiles/hp44714a/objects.*): a write is the manual's command, acted on at once; a refused command
-// is answered with an SDO abort (settings conflict 0x06040043, HP error 0x08000022), its
-// number stays in 0x2n19 / 0x2n1A and an error number also goes out as EMCY 0xFF00 + n.
-// DONE?, the error number and the interrupt event word are published after every advance
-// (TPDO 4n+4 carries them); a SYNC is TRIG SYS; channel 0's trigger is TRIG CHAN0's.
+// their objects (node/profiles/hp44714a/objects.*): a write is the manual's command, acted on at
+// once; a refused command is answered with an SDO abort (settings conflict 0x06040043, HP error
+// 0x08000022), its number stays in 0x2n19 / 0x2n1A and an error number also goes out as EMCY 0xFF00
+// + n. DONE?, the error number and the interrupt event word are published after every advance (TPDO
+// 4n+4 carries them); a SYNC is TRIG SYS; channel 0's trigger is TRIG CHAN0's.
 #pragma once
 #include <cstdint>
 #include <functional>
-#include <span>
 #include <memory>
+#include <span>
 #include <vector>
 
+#include "node/axis_bank.hpp"
 #include "node/emcy.hpp"
 #include "node/motion/hp_channel.hpp"
-#include "node/axis_bank.hpp"
 #include "node/profile.hpp"
 #include "od/dictionary.hpp"
 
@@ -45,7 +45,8 @@ class HpService final : public Profile {
   void install_output_hooks(unsigned a);
   void install_counter_hooks(unsigned a);
   // A reaction on axis a's object `offset`, sub `sub`, publishing the channel after it.
-  void hook(unsigned a, uint16_t offset, uint8_t sub, std::function<od::SdoAbort(std::span<const uint8_t>)> f);
+  void hook(unsigned a, uint16_t offset, uint8_t sub,
+            std::function<od::SdoAbort(std::span<const uint8_t>)> f);
   void apply_stored(unsigned a, motion::Tick t);
   void publish(unsigned a);
   od::SdoAbort result(unsigned a, motion::hp::Error e);

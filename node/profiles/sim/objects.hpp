@@ -10,11 +10,11 @@ namespace stepnode::sim {
 
 // The simulated machine: 0x5000 + 0x100 * axis.
 namespace obj {
-constexpr uint16_t kSwitches = 0x00;   // RECORD positions/widths of home, limits, index
-constexpr uint16_t kEncoder = 0x01;    // RECORD steps/rev, lines, marker
-constexpr uint16_t kFaults = 0x02;     // RECORD stall, missed steps, displacement
+constexpr uint16_t kSwitches = 0x00;            // RECORD positions/widths of home, limits, index
+constexpr uint16_t kEncoder = 0x01;             // RECORD steps/rev, lines, marker
+constexpr uint16_t kFaults = 0x02;              // RECORD stall, missed steps, displacement
 constexpr uint16_t kMechanicalPosition = 0x03;  // I32 ro
-constexpr uint16_t kInputs = 0x04;     // U8 ro: bit0 home, 1 lower, 2 upper, 3 index, 4 marker
+constexpr uint16_t kInputs = 0x04;  // U8 ro: bit0 home, 1 lower, 2 upper, 3 index, 4 marker
 inline uint16_t index(unsigned axis, uint16_t offset) {
   return static_cast<uint16_t>(0x5000 + 0x100 * axis + offset);
 }

@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "od/can_frame.hpp"
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/tests/stepnode_device.hpp"
 #include "node/profiles/user/objects.hpp"
+#include "od/can_frame.hpp"
 #include "od/pdo_mapping.hpp"
 
 namespace stepnode::od {
@@ -28,7 +28,9 @@ class DeviceDictionaryRules : public ::testing::Test {
   void SetUp() override { build_stepnode_device(od, info); }
   SdoAbort w32(uint16_t i, uint8_t s, uint32_t v) { return od.write(i, s, encode<uint32_t>(v)); }
   SdoAbort w16(uint16_t i, uint8_t s, uint16_t v) { return od.write(i, s, encode<uint16_t>(v)); }
-  SdoAbort w8(uint16_t i, uint8_t s, unsigned v) { return od.write(i, s, Bytes{static_cast<uint8_t>(v)}); }
+  SdoAbort w8(uint16_t i, uint8_t s, unsigned v) {
+    return od.write(i, s, Bytes{static_cast<uint8_t>(v)});
+  }
   uint32_t r32(uint16_t i, uint8_t s) { return decode<uint32_t>(od.read(i, s).data); }
   DeviceInfo info{.node_id = 5};
   Dictionary od;
@@ -43,11 +45,11 @@ TEST_P(DefaultsForNode, PredefinedConnectionSet) {
   DeviceInfo info{.node_id = node};
   Dictionary od;
   build_stepnode_device(od, info);
-  EXPECT_EQ(od.get<uint32_t>(0x1005, 0), 0x80u);            // SYNC, not produced
-  EXPECT_EQ(od.get<uint32_t>(0x1014, 0), 0x80u + node);     // EMCY
+  EXPECT_EQ(od.get<uint32_t>(0x1005, 0), 0x80u);         // SYNC, not produced
+  EXPECT_EQ(od.get<uint32_t>(0x1014, 0), 0x80u + node);  // EMCY
   EXPECT_EQ(od.get<uint8_t>(0x1200, 0), 2);
-  EXPECT_EQ(od.get<uint32_t>(0x1200, 1), 0x600u + node);    // client -> server
-  EXPECT_EQ(od.get<uint32_t>(0x1200, 2), 0x580u + node);    // server -> client
+  EXPECT_EQ(od.get<uint32_t>(0x1200, 1), 0x600u + node);  // client -> server
+  EXPECT_EQ(od.get<uint32_t>(0x1200, 2), 0x580u + node);  // server -> client
   for (unsigned n = 0; n < 4; ++n) {
     SCOPED_TRACE(n);
     EXPECT_EQ(od.get<uint32_t>(idx(0x1800, n), 1), 0x40000180u + 0x100 * n + node);  // TPDO, no RTR
@@ -85,8 +87,12 @@ TEST_F(DeviceDictionaryRules, IdentityAndOtherDefaults) {
   EXPECT_EQ(od.get<uint8_t>(0x1010, 0), 4);
   EXPECT_EQ(od.get<uint8_t>(0x1011, 0), 4);
 
-  DeviceInfo custom{.node_id = 9, .device_name = "x", .vendor_id = 0x1234,
-                    .product_code = 7, .revision = 0x00020003, .serial_number = 42};
+  DeviceInfo custom{.node_id = 9,
+                    .device_name = "x",
+                    .vendor_id = 0x1234,
+                    .product_code = 7,
+                    .revision = 0x00020003,
+                    .serial_number = 42};
   Dictionary other;
   build_stepnode_device(other, custom, {.axes = 1});
   EXPECT_EQ(other.value(0x1008, 0), encode_string("x"));
@@ -190,31 +196,31 @@ TEST_F(DeviceDictionaryRules, EveryDefaultPassesItsOwnTypeLengthAndLimits) {
 // ---- abort codes ----------------------------------------------------------------------------
 
 TEST_F(DeviceDictionaryRules, EveryAbortCodeOfTheDeviceDictionary) {
-  EXPECT_EQ(od.read(0x5002, 6).abort, SdoAbort::WriteOnly);                     // 0x06010001
+  EXPECT_EQ(od.read(0x5002, 6).abort, SdoAbort::WriteOnly);                      // 0x06010001
   EXPECT_EQ(w32(0x1000, 0, 1), SdoAbort::ReadOnly);                              // 0x06010002
-  EXPECT_EQ(od.write(0x1008, 0, encode_string("y")), SdoAbort::ReadOnly);       // const
+  EXPECT_EQ(od.write(0x1008, 0, encode_string("y")), SdoAbort::ReadOnly);        // const
   EXPECT_EQ(od.read(0x1F00, 0).abort, SdoAbort::NoObject);                       // 0x06020000
   EXPECT_EQ(od.read(0x1018, 5).abort, SdoAbort::NoSubindex);                     // 0x06090011
   EXPECT_EQ(od.write(0x1017, 0, encode<uint32_t>(5)), SdoAbort::LengthTooHigh);  // 0x06070012
   EXPECT_EQ(od.write(0x1017, 0, Bytes{5}), SdoAbort::LengthTooLow);              // 0x06070013
   EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
   EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength, 0)), SdoAbort::None);
-  EXPECT_EQ(w8(0x1003, 0, 1), SdoAbort::InvalidValue);                           // 0x06090030
-  EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);                           // 0x06090031
+  EXPECT_EQ(w8(0x1003, 0, 1), SdoAbort::InvalidValue);                                 // 0x06090030
+  EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);                                 // 0x06090031
   EXPECT_EQ(od.write(0x2002, 0, encode<int32_t>(-8'388'609)), SdoAbort::ValueTooLow);  // 0x06090032
   EXPECT_EQ(w32(0x1800, 1, kInvalid | kNoRtr | 0x185), SdoAbort::None);
   EXPECT_EQ(w8(0x1A00, 0, 0), SdoAbort::None);
-  EXPECT_EQ(w32(0x1A00, 1, 0x10170010), SdoAbort::NotMappable);                  // 0x06040041
-  EXPECT_EQ(w32(0x1A00, 1, 0x2F000110), SdoAbort::ParameterIncompatible);        // 0x06040043
+  EXPECT_EQ(w32(0x1A00, 1, 0x10170010), SdoAbort::NotMappable);            // 0x06040041
+  EXPECT_EQ(w32(0x1A00, 1, 0x2F000110), SdoAbort::ParameterIncompatible);  // 0x06040043
   EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::None);
   EXPECT_EQ(w32(0x1A00, 2, 0x2F000220), SdoAbort::None);
   EXPECT_EQ(w32(0x1A00, 3, 0x10010008), SdoAbort::None);
-  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::PdoTooLong);                             // 0x06040042
+  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::PdoTooLong);  // 0x06040042
   EXPECT_EQ(w32(0x1016, 1, 0x00070064), SdoAbort::None);
-  EXPECT_EQ(w32(0x1016, 2, 0x000700C8), SdoAbort::ParameterIncompatible);        // 0x06040043
-  EXPECT_EQ(w32(0x1010, 1, 0x12345678), SdoAbort::DataTransfer);                 // 0x08000020
+  EXPECT_EQ(w32(0x1016, 2, 0x000700C8), SdoAbort::ParameterIncompatible);  // 0x06040043
+  EXPECT_EQ(w32(0x1010, 1, 0x12345678), SdoAbort::DataTransfer);           // 0x08000020
   EXPECT_EQ(w32(0x1011, 1, 0x12345678), SdoAbort::DataTransfer);
-  EXPECT_EQ(w8(0x1A01, 0, 0), SdoAbort::DeviceState);                            // 0x08000022
+  EXPECT_EQ(w8(0x1A01, 0, 0), SdoAbort::DeviceState);  // 0x08000022
   EXPECT_EQ(w32(0x1006, 0, 1000), SdoAbort::None);
   EXPECT_EQ(w8(0x1019, 0, 2), SdoAbort::DeviceState);
 }
@@ -262,13 +268,13 @@ TEST_F(DeviceDictionaryRules, TpdoMappingProcedureAndTheRefusalAtEachWrongStep) 
   EXPECT_EQ(w32(0x1A00, 4, 0), SdoAbort::None);  // 0 clears an entry
   EXPECT_EQ(w32(0x1A00, 5, 0x2F000220), SdoAbort::None);
   // 4. Enable the mapping with the number of entries: each is checked again, and the total.
-  EXPECT_EQ(w8(0x1A00, 0, 4), SdoAbort::NoObject);      // entry 4 is empty
+  EXPECT_EQ(w8(0x1A00, 0, 4), SdoAbort::NoObject);  // entry 4 is empty
   EXPECT_EQ(w8(0x1A00, 0, 5), SdoAbort::NoObject);
   EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);  // only 8 entries
   EXPECT_EQ(w32(0x1A00, 4, 0x2F000320), SdoAbort::None);
-  EXPECT_EQ(w8(0x1A00, 0, 4), SdoAbort::PdoTooLong);    // 32+8+16+32 = 88 bits
+  EXPECT_EQ(w8(0x1A00, 0, 4), SdoAbort::PdoTooLong);  // 32+8+16+32 = 88 bits
   EXPECT_EQ(od.get<uint8_t>(0x1A00, 0), 0);
-  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::None);          // 56 bits
+  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::None);  // 56 bits
   // Once enabled, the entries are fixed again.
   EXPECT_EQ(w32(0x1A00, 1, 0x2F000420), SdoAbort::DeviceState);
   // 5. Create the PDO again.
@@ -281,29 +287,32 @@ TEST_F(DeviceDictionaryRules, TpdoMappingProcedureAndTheRefusalAtEachWrongStep) 
   PdoMapping mapping;
   for (uint8_t i = 1; i <= od.get<uint8_t>(0x1A00, 0); ++i)
     mapping.push_back(MappedEntry::from_word(od.get<uint32_t>(0x1A00, i)));
-  EXPECT_EQ(pack_pdo(od, mapping), (std::vector<uint8_t>{0x44, 0x33, 0x22, 0x11, 0x81, 0xEF, 0xBE}));
+  EXPECT_EQ(pack_pdo(od, mapping),
+            (std::vector<uint8_t>{0x44, 0x33, 0x22, 0x11, 0x81, 0xEF, 0xBE}));
 }
 
 TEST_F(DeviceDictionaryRules, RpdoMappingProcedureWithDummies) {
   EXPECT_EQ(w32(0x1600, 1, 0x2F000120), SdoAbort::DeviceState);
   EXPECT_EQ(w32(0x1400, 1, kInvalid | 0x205), SdoAbort::None);  // 1.
   EXPECT_EQ(w32(0x1600, 1, 0x2F000120), SdoAbort::DeviceState);
-  EXPECT_EQ(w8(0x1600, 0, 0), SdoAbort::None);                  // 2.
+  EXPECT_EQ(w8(0x1600, 0, 0), SdoAbort::None);                   // 2.
   EXPECT_EQ(w32(0x1600, 1, 0x10010008), SdoAbort::NotMappable);  // read-only: not received
   EXPECT_EQ(w32(0x1600, 1, 0x20010010), SdoAbort::NotMappable);  // status bits: read-only
   EXPECT_EQ(w32(0x1600, 1, 0x00010001), SdoAbort::NotMappable);  // BOOLEAN dummy: unsupported
   EXPECT_EQ(w32(0x1600, 1, 0x00070010), SdoAbort::ParameterIncompatible);
-  EXPECT_EQ(w32(0x1600, 1, 0x00050008), SdoAbort::None);         // 3. dummy U8
+  EXPECT_EQ(w32(0x1600, 1, 0x00050008), SdoAbort::None);  // 3. dummy U8
   EXPECT_EQ(w32(0x1600, 2, 0x2F000120), SdoAbort::None);
-  EXPECT_EQ(w32(0x1600, 3, 0x00060010), SdoAbort::None);         // dummy U16
+  EXPECT_EQ(w32(0x1600, 3, 0x00060010), SdoAbort::None);  // dummy U16
   EXPECT_EQ(w32(0x1600, 4, 0x00050008), SdoAbort::None);
-  EXPECT_EQ(w8(0x1600, 0, 4), SdoAbort::None);                   // 4. 64 bits
-  EXPECT_EQ(w32(0x1400, 1, 0x205), SdoAbort::None);              // 5.
+  EXPECT_EQ(w8(0x1600, 0, 4), SdoAbort::None);       // 4. 64 bits
+  EXPECT_EQ(w32(0x1400, 1, 0x205), SdoAbort::None);  // 5.
 
   PdoMapping mapping;
-  for (uint8_t i = 1; i <= 4; ++i) mapping.push_back(MappedEntry::from_word(od.get<uint32_t>(0x1600, i)));
-  EXPECT_EQ(unpack_pdo(od, mapping, std::vector<uint8_t>{0xEE, 0x78, 0x56, 0x34, 0x12, 0xDD, 0xDD, 0xCC}),
-            SdoAbort::None);
+  for (uint8_t i = 1; i <= 4; ++i)
+    mapping.push_back(MappedEntry::from_word(od.get<uint32_t>(0x1600, i)));
+  EXPECT_EQ(
+      unpack_pdo(od, mapping, std::vector<uint8_t>{0xEE, 0x78, 0x56, 0x34, 0x12, 0xDD, 0xDD, 0xCC}),
+      SdoAbort::None);
   EXPECT_EQ(od.get<uint32_t>(0x2F00, 1), 0x12345678u);
 }
 
@@ -316,7 +325,8 @@ TEST(RestrictedCanIds, TheCiA301Table) {
            (id >= 0x581 && id <= 0x5FF) || (id >= 0x601 && id <= 0x67F) ||
            (id >= 0x6E0 && id <= 0x6FF) || (id >= 0x701 && id <= 0x77F) || id >= 0x780;
   };
-  for (uint32_t id = 0; id <= 0x7FF; ++id) EXPECT_EQ(is_restricted_can_id(id), restricted(id)) << std::hex << id;
+  for (uint32_t id = 0; id <= 0x7FF; ++id)
+    EXPECT_EQ(is_restricted_can_id(id), restricted(id)) << std::hex << id;
   for (uint32_t id : {0x080u, 0x100u, 0x181u, 0x580u, 0x600u, 0x680u, 0x6DFu, 0x700u})
     EXPECT_FALSE(is_restricted_can_id(id)) << std::hex << id;
 }
@@ -369,15 +379,15 @@ TEST_F(DeviceDictionaryRules, PdoCobIdRestrictedIdsOnlyWhileInvalid) {
 }
 
 TEST_F(DeviceDictionaryRules, EmcyCobId) {
-  EXPECT_EQ(w32(0x1014, 0, 0x86), SdoAbort::InvalidValue);          // CAN-ID change while valid
+  EXPECT_EQ(w32(0x1014, 0, 0x86), SdoAbort::InvalidValue);  // CAN-ID change while valid
   EXPECT_EQ(w32(0x1014, 0, 0x85), SdoAbort::None);
   EXPECT_EQ(w32(0x1014, 0, kFrame | 0x85), SdoAbort::InvalidValue);  // 29-bit
-  EXPECT_EQ(w32(0x1014, 0, 0x00010085), SdoAbort::InvalidValue);    // bits 11..28
+  EXPECT_EQ(w32(0x1014, 0, 0x00010085), SdoAbort::InvalidValue);     // bits 11..28
   EXPECT_EQ(w32(0x1014, 0, kNoRtr | 0x85), SdoAbort::InvalidValue);  // bit 30 is reserved (0)
   EXPECT_EQ(w32(0x1014, 0, kInvalid | 0x85), SdoAbort::None);        // EMCY off
   EXPECT_EQ(w32(0x1014, 0, kInvalid | 0x701), SdoAbort::None);
-  EXPECT_EQ(w32(0x1014, 0, 0x701), SdoAbort::InvalidValue);         // restricted
-  EXPECT_EQ(w32(0x1014, 0, 0x0FF), SdoAbort::None);                 // on, another ID
+  EXPECT_EQ(w32(0x1014, 0, 0x701), SdoAbort::InvalidValue);  // restricted
+  EXPECT_EQ(w32(0x1014, 0, 0x0FF), SdoAbort::None);          // on, another ID
   EXPECT_EQ(od.get<uint32_t>(0x1014, 0), 0x0FFu);
 }
 
@@ -459,11 +469,11 @@ TEST_F(DeviceDictionaryRules, HeartbeatConsumerOneEntryPerNode) {
   EXPECT_EQ(w32(0x1016, 1, 0x000701F4), SdoAbort::None);  // node 7, 500 ms
   EXPECT_EQ(w32(0x1016, 2, 0x00070064), SdoAbort::ParameterIncompatible);
   EXPECT_EQ(w32(0x1016, 4, 0x000703E8), SdoAbort::ParameterIncompatible);
-  EXPECT_EQ(w32(0x1016, 2, 0x00070000), SdoAbort::None);  // time 0: entry not used
-  EXPECT_EQ(w32(0x1016, 3, 0x00080064), SdoAbort::None);  // another node
-  EXPECT_EQ(w32(0x1016, 1, 0x00070064), SdoAbort::None);  // its own entry may change
-  EXPECT_EQ(w32(0x1016, 4, 0x00000064), SdoAbort::None);  // node 0: not used
-  EXPECT_EQ(w32(0x1016, 4, 0x00800064), SdoAbort::None);  // node 128: not used
+  EXPECT_EQ(w32(0x1016, 2, 0x00070000), SdoAbort::None);          // time 0: entry not used
+  EXPECT_EQ(w32(0x1016, 3, 0x00080064), SdoAbort::None);          // another node
+  EXPECT_EQ(w32(0x1016, 1, 0x00070064), SdoAbort::None);          // its own entry may change
+  EXPECT_EQ(w32(0x1016, 4, 0x00000064), SdoAbort::None);          // node 0: not used
+  EXPECT_EQ(w32(0x1016, 4, 0x00800064), SdoAbort::None);          // node 128: not used
   EXPECT_EQ(w32(0x1016, 4, 0x01080064), SdoAbort::InvalidValue);  // bits 24..31 reserved
   EXPECT_EQ(w32(0x1016, 1, 0), SdoAbort::None);
   EXPECT_EQ(w32(0x1016, 2, 0x00070064), SdoAbort::None);  // node 7 free again

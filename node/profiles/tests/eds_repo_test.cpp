@@ -46,8 +46,9 @@ TEST(EdsRepo, StepnodeEdsEqualsTheGenerator) {
     std::ofstream(path, std::ios::binary | std::ios::trunc) << generated;
   }
   std::ifstream in(path, std::ios::binary);
-  ASSERT_TRUE(in) << path << " is missing. Generate it with:\n"
-                  << "  STEPNODE_WRITE_EDS=1 build/node/device_objects_tests --gtest_filter='*Eds*Repo*'";
+  ASSERT_TRUE(in)
+      << path << " is missing. Generate it with:\n"
+      << "  STEPNODE_WRITE_EDS=1 build/node/device_objects_tests --gtest_filter='*Eds*Repo*'";
   std::stringstream file;
   file << in.rdbuf();
   EXPECT_TRUE(file.str() == generated)

@@ -78,7 +78,8 @@ class EdsTest : public ::testing::Test {
   std::vector<uint16_t> list(const std::string& name) {
     std::vector<uint16_t> out;
     unsigned n = static_cast<unsigned>(std::stoul(get(name, "SupportedObjects")));
-    for (unsigned i = 1; i <= n; ++i) out.push_back(static_cast<uint16_t>(std::stoul(get(name, std::to_string(i)), nullptr, 16)));
+    for (unsigned i = 1; i <= n; ++i)
+      out.push_back(static_cast<uint16_t>(std::stoul(get(name, std::to_string(i)), nullptr, 16)));
     return out;
   }
 
@@ -120,7 +121,9 @@ TEST_F(EdsTest, LimitsAreWrittenInTheEntrysType) {
   for (const auto& [index, obj] : od.objects()) {
     for (const auto& [sub, e] : obj.entries) {
       SCOPED_TRACE(testing::Message() << std::hex << index << ":" << int(sub));
-      std::string sec = obj.code == ObjectCode::Var ? hex4(index) : hex4(index) + "sub" + hex4(sub).substr(2 + (sub < 16));
+      std::string sec = obj.code == ObjectCode::Var
+                            ? hex4(index)
+                            : hex4(index) + "sub" + hex4(sub).substr(2 + (sub < 16));
       const auto& s = section(sec);
       EXPECT_EQ(s.count("lowlimit"), e.low ? 1u : 0u);
       EXPECT_EQ(s.count("highlimit"), e.high ? 1u : 0u);
@@ -201,9 +204,12 @@ TEST_F(EdsTest, FileInfo) {
   EXPECT_EQ(get("FileInfo", "FileVersion"), "1");
   EXPECT_EQ(get("FileInfo", "FileRevision"), "0");
   EXPECT_NE(get("FileInfo", "Description"), "<missing>");
-  std::regex time(R"((0[1-9]|1[0-2]):[0-5][0-9](AM|PM))"), date(R"((0[1-9]|1[0-2])-(0[1-9]|[12][0-9]|3[01])-[0-9]{4})");
-  for (const char* k : {"CreationTime", "ModificationTime"}) EXPECT_TRUE(std::regex_match(get("FileInfo", k), time)) << k;
-  for (const char* k : {"CreationDate", "ModificationDate"}) EXPECT_TRUE(std::regex_match(get("FileInfo", k), date)) << k;
+  std::regex time(R"((0[1-9]|1[0-2]):[0-5][0-9](AM|PM))"),
+      date(R"((0[1-9]|1[0-2])-(0[1-9]|[12][0-9]|3[01])-[0-9]{4})");
+  for (const char* k : {"CreationTime", "ModificationTime"})
+    EXPECT_TRUE(std::regex_match(get("FileInfo", k), time)) << k;
+  for (const char* k : {"CreationDate", "ModificationDate"})
+    EXPECT_TRUE(std::regex_match(get("FileInfo", k), date)) << k;
   EXPECT_NE(get("FileInfo", "CreatedBy"), "<missing>");
   EXPECT_NE(get("FileInfo", "ModifiedBy"), "<missing>");
 }
@@ -399,15 +405,18 @@ TEST(EdsReader, ErrorsNameTheLine) {
   expect_error_at_line("FileName=x\n[FileInfo]\n", 1, "before the first");
   expect_error_at_line("[FileInfo]\n=5\n", 2, "empty key");
   expect_error_at_line("[]\n", 1, "empty section");
-  expect_error_at_line("[1000]\nParameterName=x\nDataType=0x0007\nAccessType=xx\n", 4, "AccessType 'xx'");
+  expect_error_at_line("[1000]\nParameterName=x\nDataType=0x0007\nAccessType=xx\n", 4,
+                       "AccessType 'xx'");
   expect_error_at_line("[1000]\nParameterName=x\nDataType=0x00zz\nAccessType=ro\n", 3, "DataType");
   expect_error_at_line("[1000]\nParameterName=x\nDataType=-7\nAccessType=ro\n", 3, "DataType");
   expect_error_at_line("[1000]\nParameterName=x\nDataType=0x10007\nAccessType=ro\n", 3, "DataType");
-  expect_error_at_line("[1000]\nParameterName=x\nDataType=0x0007\nAccessType=ro\nPDOMapping=yes\n", 5, "PDOMapping");
+  expect_error_at_line("[1000]\nParameterName=x\nDataType=0x0007\nAccessType=ro\nPDOMapping=yes\n",
+                       5, "PDOMapping");
   expect_error_at_line("[FileInfo]\n[1000]\nParameterName=x\nAccessType=ro\n", 2, "no DataType");
   expect_error_at_line("[1000]\nDataType=0x0007\nAccessType=ro\n", 1, "no ParameterName");
   expect_error_at_line("[1000]\nParameterName=x\nDataType=0x0007\n", 1, "no AccessType");
-  expect_error_at_line("\n\n[1018sub100]\nParameterName=x\nDataType=0x0007\nAccessType=ro\n", 3, "sub-index");
+  expect_error_at_line("\n\n[1018sub100]\nParameterName=x\nDataType=0x0007\nAccessType=ro\n", 3,
+                       "sub-index");
   expect_error_at_line("[1018subx]\n", 1, "sub-index");
   expect_error_at_line("[1018]\nObjectType=nine\n", 2, "ObjectType");
   expect_error_at_line("[1018sub1]\nParameterName=x\nAccessType=ro\n", 1, "no DataType");

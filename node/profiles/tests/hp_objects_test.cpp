@@ -3,9 +3,9 @@
 // power-on defaults from the manual (3-2), TPDO 4n+4's default mapping, and EMCY words.
 #include <gtest/gtest.h>
 
+#include "node/profiles/hp44714a/objects.hpp"
 #include "node/profiles/tests/stepnode_device.hpp"
 #include "od/emcy_text.hpp"
-#include "node/profiles/hp44714a/objects.hpp"
 
 namespace stepnode::od {
 namespace {
@@ -35,16 +35,22 @@ TEST(HpObjects, FixedInterfaceTypesAndAccess) {
     // TPDO 4a+4: DONE?, error, event word.
     uint16_t map = static_cast<uint16_t>(0x1A00 + 4 * a + 3);
     EXPECT_EQ(od.get<uint8_t>(map, 0), 3);
-    EXPECT_EQ(od.get<uint32_t>(map, 1), (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kDone)} << 16) | 8u);
-    EXPECT_EQ(od.get<uint32_t>(map, 2), (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kError)} << 16) | 8u);
-    EXPECT_EQ(od.get<uint32_t>(map, 3), (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kInterrupt)} << 16) | 0x0208u);
+    EXPECT_EQ(od.get<uint32_t>(map, 1),
+              (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kDone)} << 16) | 8u);
+    EXPECT_EQ(od.get<uint32_t>(map, 2),
+              (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kError)} << 16) | 8u);
+    EXPECT_EQ(od.get<uint32_t>(map, 3),
+              (uint32_t{hp44714a::obj::index(a, hp44714a::obj::kInterrupt)} << 16) | 0x0208u);
   }
-  EXPECT_EQ(od.object(hp44714a::obj::index(3, hp44714a::obj::kDone)), nullptr);  // only the configured axes
+  EXPECT_EQ(od.object(hp44714a::obj::index(3, hp44714a::obj::kDone)),
+            nullptr);  // only the configured axes
 }
 
 TEST(HpObjects, EmcyCodesHaveTheManualsWords) {
-  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kErrorEmcyBase + 91), "HP error 91 MUST STOP TO CHANGE DIRECTION");
-  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kInterruptEmcyBase + 3), "HP interrupt: a hard limit stopped pulses");
+  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kErrorEmcyBase + 91),
+               "HP error 91 MUST STOP TO CHANGE DIRECTION");
+  EXPECT_STREQ(hp44714a::emcy_text(hp44714a::kInterruptEmcyBase + 3),
+               "HP interrupt: a hard limit stopped pulses");
   EXPECT_EQ(hp44714a::emcy_text(0xFF01), nullptr);  // the Horner axis codes are not the channels'
   EXPECT_EQ(emcy_code_text(0xFF5B), "device specific error");  // od knows no manufacturer codes
 }

@@ -3,7 +3,6 @@
 // PDO packing, and the EDS writer/reader.
 #include <gtest/gtest.h>
 
-
 #include "node/profiles/tests/stepnode_device.hpp"
 #include "node/profiles/user/objects.hpp"
 #include "od/eds.hpp"
@@ -29,13 +28,13 @@ TEST_F(DeviceDictionaryTest, AbortCodesOfTheDictionary) {
   EXPECT_EQ(w32(0x1008, 0, 1), SdoAbort::ReadOnly);                              // const
   EXPECT_EQ(od.write(0x1017, 0, encode<uint32_t>(5)), SdoAbort::LengthTooHigh);  // 0x06070012
   EXPECT_EQ(od.write(0x1017, 0, Bytes{5}), SdoAbort::LengthTooLow);              // 0x06070013
-  EXPECT_EQ(w8(0x1A00, 0, 1), SdoAbort::DeviceState);                            // PDO valid: 0x08000022
+  EXPECT_EQ(w8(0x1A00, 0, 1), SdoAbort::DeviceState);  // PDO valid: 0x08000022
   EXPECT_EQ(w32(0x1800, 1, 0x80000185), SdoAbort::None);
-  EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);                           // 0x06090031
+  EXPECT_EQ(w8(0x1A00, 0, 9), SdoAbort::ValueTooHigh);                                 // 0x06090031
   EXPECT_EQ(od.write(0x2002, 0, encode<int32_t>(-8'388'609)), SdoAbort::ValueTooLow);  // 0x06090032
-  EXPECT_EQ(od.write(0x2009, 5, Bytes{2}), SdoAbort::InvalidValue);              // BOOLEAN 2: 0x06090030
-  EXPECT_EQ(w32(0x1010, 1, 0x12345678), SdoAbort::DataTransfer);                 // 0x08000020
-  EXPECT_EQ(w32(0x1011, 1, 0x65766173), SdoAbort::DataTransfer);                 // "save" is not "load"
+  EXPECT_EQ(od.write(0x2009, 5, Bytes{2}), SdoAbort::InvalidValue);  // BOOLEAN 2: 0x06090030
+  EXPECT_EQ(w32(0x1010, 1, 0x12345678), SdoAbort::DataTransfer);     // 0x08000020
+  EXPECT_EQ(w32(0x1011, 1, 0x65766173), SdoAbort::DataTransfer);     // "save" is not "load"
   // A write-only object cannot be read (0x06010001): the simulated displacement.
   EXPECT_EQ(od.read(0x5002, 6).abort, SdoAbort::WriteOnly);
   EXPECT_EQ(od.write(0x2F01, 0, Bytes(user::kDataMaxLength + 1, 0)), SdoAbort::LengthTooHigh);
@@ -50,41 +49,41 @@ TEST_F(DeviceDictionaryTest, PredefinedConnectionSetDefaults) {
     EXPECT_EQ(od.get<uint32_t>(static_cast<uint16_t>(0x1800 + n), 1), 0x40000185u + 0x100 * n);
   }
   EXPECT_TRUE(od.get<uint32_t>(0x1804, 1) & 0x80000000u);  // PDO 5+: no ID until given one
-  EXPECT_NE(od.object(0x180B), nullptr);                     // 4 per axis, 3 axes
+  EXPECT_NE(od.object(0x180B), nullptr);                   // 4 per axis, 3 axes
   EXPECT_EQ(od.object(0x180C), nullptr);
 }
 
 // CiA 301 7.5.2.36: the dynamic mapping procedure and its refusals at each wrong step.
 TEST_F(DeviceDictionaryTest, PdoMappingProcedure) {
-  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::DeviceState);  // PDO still valid
-  EXPECT_EQ(w32(0x1800, 1, 0xC0000185), SdoAbort::None);           // 1. destroy
-  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::DeviceState);  // count not yet 0
-  EXPECT_EQ(w8(0x1A00, 0, 0), SdoAbort::None);                     // 2. disable mapping
-  EXPECT_EQ(w32(0x1A00, 1, 0x10080008), SdoAbort::NotMappable);   // string: 0x06040041
+  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::DeviceState);            // PDO still valid
+  EXPECT_EQ(w32(0x1800, 1, 0xC0000185), SdoAbort::None);                   // 1. destroy
+  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::DeviceState);            // count not yet 0
+  EXPECT_EQ(w8(0x1A00, 0, 0), SdoAbort::None);                             // 2. disable mapping
+  EXPECT_EQ(w32(0x1A00, 1, 0x10080008), SdoAbort::NotMappable);            // string: 0x06040041
   EXPECT_EQ(w32(0x1A00, 1, 0x2F000110), SdoAbort::ParameterIncompatible);  // wrong length
   EXPECT_EQ(w32(0x1A00, 1, 0x30000020), SdoAbort::NoObject);
-  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::None);           // 3. entries
+  EXPECT_EQ(w32(0x1A00, 1, 0x2F000120), SdoAbort::None);  // 3. entries
   EXPECT_EQ(w32(0x1A00, 2, 0x2F000220), SdoAbort::None);
   EXPECT_EQ(w32(0x1A00, 3, 0x10010008), SdoAbort::None);
-  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::PdoTooLong);               // 72 bits: 0x06040042
-  EXPECT_EQ(w8(0x1A00, 0, 2), SdoAbort::None);                     // 4. enable
-  EXPECT_EQ(w32(0x1800, 1, 0x40000185), SdoAbort::None);           // 5. create
+  EXPECT_EQ(w8(0x1A00, 0, 3), SdoAbort::PdoTooLong);      // 72 bits: 0x06040042
+  EXPECT_EQ(w8(0x1A00, 0, 2), SdoAbort::None);            // 4. enable
+  EXPECT_EQ(w32(0x1800, 1, 0x40000185), SdoAbort::None);  // 5. create
   // RPDOs map only writable entries, and may use dummies (not BOOLEAN).
   EXPECT_EQ(w32(0x1400, 1, 0x80000205), SdoAbort::None);
   EXPECT_EQ(w8(0x1600, 0, 0), SdoAbort::None);
-  EXPECT_EQ(w32(0x1600, 1, 0x10010008), SdoAbort::NotMappable);   // read-only
-  EXPECT_EQ(w32(0x1600, 1, 0x00050008), SdoAbort::None);           // dummy UNSIGNED8
-  EXPECT_EQ(w32(0x1600, 2, 0x00010001), SdoAbort::NotMappable);   // dummy BOOLEAN
+  EXPECT_EQ(w32(0x1600, 1, 0x10010008), SdoAbort::NotMappable);  // read-only
+  EXPECT_EQ(w32(0x1600, 1, 0x00050008), SdoAbort::None);         // dummy UNSIGNED8
+  EXPECT_EQ(w32(0x1600, 2, 0x00010001), SdoAbort::NotMappable);  // dummy BOOLEAN
 }
 
 TEST_F(DeviceDictionaryTest, CobIdRules) {
   EXPECT_EQ(w32(0x1800, 1, 0x40000186), SdoAbort::InvalidValue);  // CAN-ID change while valid
   EXPECT_EQ(w32(0x1800, 1, 0x60000185), SdoAbort::InvalidValue);  // 29-bit
   EXPECT_EQ(w32(0x1800, 1, 0xC0000185), SdoAbort::None);
-  EXPECT_EQ(w32(0x1800, 1, 0x40000701), SdoAbort::InvalidValue);  // restricted (heartbeat)
-  EXPECT_EQ(w32(0x1800, 1, 0xC0000701), SdoAbort::None);           // allowed while invalid
-  EXPECT_EQ(w8(0x1800, 2, 241), SdoAbort::InvalidValue);           // reserved
-  EXPECT_EQ(w8(0x1800, 2, 252), SdoAbort::InvalidValue);           // RTR only
+  EXPECT_EQ(w32(0x1800, 1, 0x40000701), SdoAbort::InvalidValue);         // restricted (heartbeat)
+  EXPECT_EQ(w32(0x1800, 1, 0xC0000701), SdoAbort::None);                 // allowed while invalid
+  EXPECT_EQ(w8(0x1800, 2, 241), SdoAbort::InvalidValue);                 // reserved
+  EXPECT_EQ(w8(0x1800, 2, 252), SdoAbort::InvalidValue);                 // RTR only
   EXPECT_EQ(od.write(0x1800, 3, encode<uint16_t>(10)), SdoAbort::None);  // invalid: may change
   EXPECT_EQ(w32(0x1800, 1, 0x40000190), SdoAbort::None);
   EXPECT_EQ(od.write(0x1800, 3, encode<uint16_t>(20)), SdoAbort::InvalidValue);  // valid: not
@@ -144,8 +143,8 @@ TEST(Eds, RoundTripAndStructure) {
   build_stepnode_device(od, info);
   std::string text = write_eds(od, info);
   EdsFile eds = parse_eds(text);
-  for (const char* section : {"fileinfo", "deviceinfo", "dummyusage", "mandatoryobjects", "optionalobjects",
-                              "manufacturerobjects"})
+  for (const char* section : {"fileinfo", "deviceinfo", "dummyusage", "mandatoryobjects",
+                              "optionalobjects", "manufacturerobjects"})
     EXPECT_TRUE(eds.sections.count(section)) << section;
   EXPECT_EQ(eds.sections["deviceinfo"]["nroftxpdo"], "12");
   EXPECT_EQ(eds.sections["mandatoryobjects"]["supportedobjects"], "3");
@@ -165,7 +164,8 @@ TEST(Eds, RoundTripAndStructure) {
       ++entries;
     }
   EXPECT_EQ(eds.entries.size(), entries);
-  EXPECT_THROW(parse_eds("[1000]\nDataType=0x0007\nAccessType=xx\nParameterName=x\n"), std::runtime_error);
+  EXPECT_THROW(parse_eds("[1000]\nDataType=0x0007\nAccessType=xx\nParameterName=x\n"),
+               std::runtime_error);
   try {
     parse_eds("[FileInfo]\nnot a key value\n");
     FAIL();

@@ -7,7 +7,8 @@
 
 namespace stepnode::od {
 
-inline void build_stepnode_device(Dictionary& od, const DeviceInfo& info, const node::DeviceLayout& layout = {}) {
+inline void build_stepnode_device(Dictionary& od, const DeviceInfo& info,
+                                  const node::DeviceLayout& layout = {}) {
   node::build_device_objects(od, info, layout);
 }
 inline unsigned pdo_count(const node::DeviceLayout& layout = {}) { return layout.pdos(); }

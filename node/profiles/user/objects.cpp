@@ -10,8 +10,8 @@ void add_objects(od::Dictionary& od) {
   using AC = od::Access;
   od::Object& regs = od.record(kRegisters, "User registers", od::ObjectCode::Array);
   for (unsigned i = 1; i <= 8; ++i)
-    regs.add(static_cast<uint8_t>(i), "User register " + std::to_string(i), DT::Unsigned32, AC::ReadWrite,
-             od::encode<uint32_t>(0), true);
+    regs.add(static_cast<uint8_t>(i), "User register " + std::to_string(i), DT::Unsigned32,
+             AC::ReadWrite, od::encode<uint32_t>(0), true);
   od::Entry& data = od.var(kData, "User data", DT::Domain, AC::ReadWrite, {});
   data.max_length = kDataMaxLength;
   data.persistent = true;

@@ -35,8 +35,8 @@ TEST(SimMachine, EncoderKindsAndMarker) {
   c.encoder_lines = 1000;  // SPM30 5.3: 1000 lines, 200 steps: MLT 1 / DIV 5 per line
   c.marker_offset = 0;
   c.marker_width = 1;
-  for (EncoderKind kind : {EncoderKind::Quadrature, EncoderKind::UpDown, EncoderKind::QuadratureNoMarker,
-                           EncoderKind::None}) {
+  for (EncoderKind kind : {EncoderKind::Quadrature, EncoderKind::UpDown,
+                           EncoderKind::QuadratureNoMarker, EncoderKind::None}) {
     c.encoder = kind;
     AxisMachine m(c);
     m.displace(-200);  // one revolution down

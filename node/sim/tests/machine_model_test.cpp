@@ -113,7 +113,8 @@ TEST(SimMachineModel, MarkerOncePerRevolutionAtItsOffsetIncludingNegativePositio
     if (m.marker() && !was) starts.push_back(m.position());
     was = m.marker();
   }
-  EXPECT_EQ(starts, (std::vector<int64_t>{-9700, -7700, -5700, -3700, -1700, 300, 2300, 4300, 6300, 8300}));
+  EXPECT_EQ(starts,
+            (std::vector<int64_t>{-9700, -7700, -5700, -3700, -1700, 300, 2300, 4300, 6300, 8300}));
   EXPECT_EQ(active, 10 * 4);  // 4 steps wide each
   // A negative offset is the same marker one revolution earlier.
   c.marker_offset = -1700;
@@ -125,7 +126,8 @@ TEST(SimMachineModel, MarkerOncePerRevolutionAtItsOffsetIncludingNegativePositio
 }
 
 TEST(SimMachineModel, OnlyAQuadratureEncoderWithMarkerHasAMarker) {
-  for (EncoderKind kind : {EncoderKind::None, EncoderKind::UpDown, EncoderKind::QuadratureNoMarker}) {
+  for (EncoderKind kind :
+       {EncoderKind::None, EncoderKind::UpDown, EncoderKind::QuadratureNoMarker}) {
     AxisMachineConfig c;
     c.encoder = kind;
     c.marker_offset = 0;
@@ -158,7 +160,8 @@ TEST(SimMachineModel, QuadratureCountsFourPerLineAndFloorsNegativePositions) {
   }
   // 2000 steps against 250 lines x4 = 1000 counts: a count every 2 steps, rounded down.
   c.encoder_lines = 250;
-  for (auto [p, counts] : std::vector<std::pair<int64_t, int64_t>>{{-3, -2}, {-2, -1}, {-1, -1}, {0, 0}, {1, 0}, {3, 1}}) {
+  for (auto [p, counts] : std::vector<std::pair<int64_t, int64_t>>{
+           {-3, -2}, {-2, -1}, {-1, -1}, {0, 0}, {1, 0}, {3, 1}}) {
     AxisMachine k(c);
     k.displace(p);
     EXPECT_EQ(k.encoder_count(), counts) << p;
@@ -205,7 +208,7 @@ TEST(SimMachineModel, StallAtAPositionJamsOnlyTowardIt) {
   for (int i = 0; i < 10; ++i) m.step(-1);
   EXPECT_EQ(m.position(), -2);
   EXPECT_EQ(m.pulses_received(), 21u);  // every pulse arrived at the drive
-  m.config().stall_above.reset();  // the jam is cleared
+  m.config().stall_above.reset();       // the jam is cleared
   for (int i = 0; i < 10; ++i) m.step(+1);
   EXPECT_EQ(m.position(), 8);
 }

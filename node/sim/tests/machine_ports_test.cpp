@@ -46,8 +46,8 @@ TEST(SimMachinePorts, ASwitchEdgeCarriesTheTickOfTheStepThatReachedIt) {
   EXPECT_TRUE(edges(m).empty());
   for (motion::Tick t = 1; t <= 6; ++t) m.queue(t * 10, +1);
   m.flush(60);
-  const std::vector<InputEdge> want{{30, Input::Home, true}, {50, Input::Home, false},
-                                    {60, Input::UpperLimit, true}};
+  const std::vector<InputEdge> want{
+      {30, Input::Home, true}, {50, Input::Home, false}, {60, Input::UpperLimit, true}};
   EXPECT_EQ(edges(m), want);
   EXPECT_TRUE(m.levels().upper_limit());
 }

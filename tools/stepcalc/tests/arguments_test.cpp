@@ -30,17 +30,21 @@ TEST(StepcalcArguments, ParsesNumbersAndDashForNoTotal) {
 }
 
 TEST(StepcalcArguments, RefusesWhatIsNotAnIntegerWithTheLegalRange) {
-  EXPECT_NE(refusal("abc", {"600", "100", "1000", "500", "0"}).find("0..16777215"), std::string::npos);
-  EXPECT_NE(refusal("1e4", {"600", "100", "1000", "500", "0"}).find("0..16777215"), std::string::npos);
+  EXPECT_NE(refusal("abc", {"600", "100", "1000", "500", "0"}).find("0..16777215"),
+            std::string::npos);
+  EXPECT_NE(refusal("1e4", {"600", "100", "1000", "500", "0"}).find("0..16777215"),
+            std::string::npos);
   EXPECT_NE(refusal("", {"600", "100", "1000", "500", "0"}).find("0..16777215"), std::string::npos);
   EXPECT_NE(refusal("99999999999999999999", {"600", "100", "1000", "500", "0"}).find("0..16777215"),
             std::string::npos);
-  EXPECT_NE(refusal("10", {"x", "100", "1000", "500", "0"}).find("%AQ3 'x' is not an integer (20..65535)"),
+  EXPECT_NE(refusal("10", {"x", "100", "1000", "500", "0"})
+                .find("%AQ3 'x' is not an integer (20..65535)"),
             std::string::npos);
   EXPECT_NE(refusal("10", {"600", "1.5", "1000", "500", "0"}).find("1..8190"), std::string::npos);
   EXPECT_NE(refusal("10", {"600", "100", "fast", "500", "0"}).find("2..8191"), std::string::npos);
   EXPECT_NE(refusal("10", {"600", "100", "1000", "", "0"}).find("1..27300"), std::string::npos);
-  EXPECT_NE(refusal("10", {"600", "100", "1000", "500", "0x10"}).find("0..27300"), std::string::npos);
+  EXPECT_NE(refusal("10", {"600", "100", "1000", "500", "0x10"}).find("0..27300"),
+            std::string::npos);
   EXPECT_NE(refusal("10", {"600", "100", "1000", "500"}).find("6 values"), std::string::npos);
 }
 

@@ -32,7 +32,8 @@ CliRun stepcalc(const std::string& args, const std::string& env = "") {
 }
 
 std::filesystem::path temp_file(const std::string& name) {
-  return std::filesystem::temp_directory_path() / ("stepcalc_test_" + std::to_string(getpid()) + "_" + name);
+  return std::filesystem::temp_directory_path() /
+         ("stepcalc_test_" + std::to_string(getpid()) + "_" + name);
 }
 
 TEST(StepcalcCli, RefusesBadInputWithExit2AndOneLineGivingTheRange) {
@@ -40,13 +41,15 @@ TEST(StepcalcCli, RefusesBadInputWithExit2AndOneLineGivingTheRange) {
     const char* args;
     const char* range;
   };
-  for (Case c : {Case{"16777216 600 100 1000 500 0", "0..16777215"}, Case{"-1 600 100 1000 500 0", "0..16777215"},
-                 Case{"ten 600 100 1000 500 0", "0..16777215"}, Case{"100 10 100 1000 500 0", "20..65535"},
-                 Case{"100 600 0 1000 500 0", "1..8190"}, Case{"100 600 -3 1000 500 0", "1..8190"},
-                 Case{"100 600 100 9000 500 0", "101..8191"}, Case{"100 600 100 1000 27301 0", "1..27300"},
-                 Case{"100 600 100 1000 500 x", "0..27300"}, Case{"100 600 100 1000 500", "AQ3 AQ4 AQ5 AQ6 AQ7"},
-                 Case{"100 600 100 1000 500 0 9", "AQ3 AQ4 AQ5 AQ6 AQ7"},
-                 Case{"100 600 100 1000 500 0 --plot x.pdf", ".svg or .png"}}) {
+  for (Case c :
+       {Case{"16777216 600 100 1000 500 0", "0..16777215"},
+        Case{"-1 600 100 1000 500 0", "0..16777215"}, Case{"ten 600 100 1000 500 0", "0..16777215"},
+        Case{"100 10 100 1000 500 0", "20..65535"}, Case{"100 600 0 1000 500 0", "1..8190"},
+        Case{"100 600 -3 1000 500 0", "1..8190"}, Case{"100 600 100 9000 500 0", "101..8191"},
+        Case{"100 600 100 1000 27301 0", "1..27300"}, Case{"100 600 100 1000 500 x", "0..27300"},
+        Case{"100 600 100 1000 500", "AQ3 AQ4 AQ5 AQ6 AQ7"},
+        Case{"100 600 100 1000 500 0 9", "AQ3 AQ4 AQ5 AQ6 AQ7"},
+        Case{"100 600 100 1000 500 0 --plot x.pdf", ".svg or .png"}}) {
     CliRun r = stepcalc(c.args);
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.out;
     EXPECT_NE(r.out.find(c.range), std::string::npos) << c.args << ": " << r.out;
@@ -88,10 +91,12 @@ TEST(StepcalcCli, PlotsSvg) {
 TEST(StepcalcCli, PlotsPngWithRsvgConvertOrSaysWhatIsMissing) {
   auto path = temp_file("plot.png");
   // Without rsvg-convert on the PATH: exit 1 and the Debian package to install.
-  CliRun missing = stepcalc("300 600 100 1000 500 250 --plot " + path.string(), "PATH=/nonexistent");
+  CliRun missing =
+      stepcalc("300 600 100 1000 500 250 --plot " + path.string(), "PATH=/nonexistent");
   EXPECT_EQ(missing.status, 1) << missing.out;
   EXPECT_NE(missing.out.find("librsvg2-bin"), std::string::npos) << missing.out;
-  if (std::system("command -v rsvg-convert >/dev/null 2>&1") != 0) GTEST_SKIP() << "rsvg-convert not installed";
+  if (std::system("command -v rsvg-convert >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "rsvg-convert not installed";
   CliRun r = stepcalc("300 600 100 1000 500 250 --plot " + path.string());
   ASSERT_EQ(r.status, 0) << r.out;
   std::ifstream in(path, std::ios::binary);

@@ -10,7 +10,8 @@ namespace {
 double area_pulses(const Curve& c) {
   double pulses = 0;
   for (size_t i = 1; i < c.size(); ++i) {
-    if (c[i].second == c[i - 1].second) pulses += c[i].second * (c[i].first - c[i - 1].first) / 1000.0;
+    if (c[i].second == c[i - 1].second)
+      pulses += c[i].second * (c[i].first - c[i - 1].first) / 1000.0;
   }
   return pulses;
 }

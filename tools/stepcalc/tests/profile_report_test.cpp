@@ -56,18 +56,17 @@ TEST(StepcalcReport, HandCalculatedTrapezoid) {
   EXPECT_EQ(e.running_pulses, 9449);
   EXPECT_EQ(e.deceleration_pulses, 276);
   EXPECT_DOUBLE_EQ(e.acceleration_time_ms, ticks_to_ms(2'457'900));  // 500.0610 ms
-  EXPECT_DOUBLE_EQ(e.running_time_ms, ticks_to_ms(46'445'853));     // 9449.4330 ms
+  EXPECT_DOUBLE_EQ(e.running_time_ms, ticks_to_ms(46'445'853));      // 9449.4330 ms
   EXPECT_DOUBLE_EQ(e.deceleration_time_ms, ticks_to_ms(2'457'892));  // 500.0594 ms
   EXPECT_DOUBLE_EQ(e.total_time_ms, ticks_to_ms(51'361'645));        // 10449.5534 ms
 }
 
 // TOTAL 300, AQ3 600, AQ4 100, AQ5 1000, AQ6 500, AQ7 250: triangular (B1.3.8).
 //   Z_A = 2731 as above; Z_D = ceil(250*24576/4500) = ceil(1365.33) = 1366
-//   Rate_D = 4915200/1366 = 3598.2430; Pulse_A = 275.2836, Pulse_D = 900*1101*1366/9830400 = 137.6922
-//   Pulse_R = 300 - 412.9758 < 0: R_T = 300/412.9758 = 0.726435
-//   Pulse_A = 199.9756, Pulse_D = 100.0244, Time_A = 500.0610*R_T = 363.2617 ms,
-//   Time_D = 250.1221*R_T = 181.6974 ms, Time_R = 0, total 544.9591 ms
-//   Vel_P = 1799.7803*0.3632617 + 100 = 753.7913 pulses/s                       (B1.3.6)
+//   Rate_D = 4915200/1366 = 3598.2430; Pulse_A = 275.2836, Pulse_D = 900*1101*1366/9830400 =
+//   137.6922 Pulse_R = 300 - 412.9758 < 0: R_T = 300/412.9758 = 0.726435 Pulse_A = 199.9756,
+//   Pulse_D = 100.0244, Time_A = 500.0610*R_T = 363.2617 ms, Time_D = 250.1221*R_T = 181.6974 ms,
+//   Time_R = 0, total 544.9591 ms Vel_P = 1799.7803*0.3632617 + 100 = 753.7913 pulses/s (B1.3.6)
 // Engine: peak = 100 + floor(300*4915200*900 / (495450*(2731+1366))) = 100 + 653 = 753;
 //   accel phase 2731*sum(101..753) = 2731*278831 = 761487461 -> 154 steps in 653*2731 =
 //   1783343 ticks; deceleration ramp phase 1366*278831 = 380883146, so it starts
@@ -149,10 +148,11 @@ TEST(StepcalcReport, HandCalculatedMoveWithoutDestination) {
   EXPECT_DOUBLE_EQ(e.total_time_ms, ticks_to_ms(2 * 499'590));
 
   std::string text = report_text(r);
-  for (const char* words : {"Actual acceleration rate =", "Actual deceleration rate =", "Actual velocity resolution =",
-                            "Actual base velocity =", "Actual running velocity =", "Actual acceleration pulses =",
-                            "Actual deceleration pulses =", "Actual total acc/dec pulses =",
-                            "Actual acceleration time =", "Actual deceleration time =", "Actual total acc/dec time ="})
+  for (const char* words :
+       {"Actual acceleration rate =", "Actual deceleration rate =", "Actual velocity resolution =",
+        "Actual base velocity =", "Actual running velocity =", "Actual acceleration pulses =",
+        "Actual deceleration pulses =", "Actual total acc/dec pulses =",
+        "Actual acceleration time =", "Actual deceleration time =", "Actual total acc/dec time ="})
     EXPECT_NE(text.find(words), std::string::npos) << words;
   EXPECT_EQ(text.find("Actual running pulses ="), std::string::npos);  // only with a total (B1.3.8)
   EXPECT_EQ(text.find("Actual total move time ="), std::string::npos);
@@ -160,23 +160,28 @@ TEST(StepcalcReport, HandCalculatedMoveWithoutDestination) {
 
 TEST(StepcalcReport, TextNamesEveryB13ValueOfAMoveWithATotal) {
   std::string text = report_text(make_report({10000, 600, 100, 1000, 500, 0}));
-  for (const char* words : {"Actual acceleration rate =", "Actual deceleration rate =", "Actual velocity resolution =",
-                            "Actual base velocity =", "Actual running velocity =", "Actual acceleration pulses =",
-                            "Actual running pulses =", "Actual deceleration pulses =", "Actual acceleration time =",
-                            "Actual running time =", "Actual deceleration time =", "Actual total move time =",
-                            "pulses/sec^2", "pulses/sec", "mS", "STPCALC", "engine"})
+  for (const char* words :
+       {"Actual acceleration rate =", "Actual deceleration rate =", "Actual velocity resolution =",
+        "Actual base velocity =", "Actual running velocity =", "Actual acceleration pulses =",
+        "Actual running pulses =", "Actual deceleration pulses =", "Actual acceleration time =",
+        "Actual running time =", "Actual deceleration time =", "Actual total move time =",
+        "pulses/sec^2", "pulses/sec", "mS", "STPCALC", "engine"})
     EXPECT_NE(text.find(words), std::string::npos) << words;
   EXPECT_EQ(text.find("Actual peak velocity ="), std::string::npos);  // trapezoid: running velocity
 }
 
 TEST(StepcalcReport, ZeroAndOnePulseMoves) {
   ProfileReport zero = make_report({0, 600, 100, 1000, 500, 0});
-  EXPECT_EQ(zero.engine.acceleration_pulses + zero.engine.running_pulses + zero.engine.deceleration_pulses, 0);
+  EXPECT_EQ(zero.engine.acceleration_pulses + zero.engine.running_pulses +
+                zero.engine.deceleration_pulses,
+            0);
   EXPECT_DOUBLE_EQ(zero.engine.total_time_ms, 0.0);
   EXPECT_GE(zero.engine.acceleration_time_ms, 0.0);
   EXPECT_DOUBLE_EQ(zero.stpcalc.total_time_ms, 0.0);
   ProfileReport one = make_report({1, 600, 100, 1000, 500, 0});
-  EXPECT_EQ(one.engine.acceleration_pulses + one.engine.running_pulses + one.engine.deceleration_pulses, 1);
+  EXPECT_EQ(
+      one.engine.acceleration_pulses + one.engine.running_pulses + one.engine.deceleration_pulses,
+      1);
   ProfileReport capped = make_report({1, 600, 100, 1000, 500, 0}, /*stpcalc_peak=*/true);
   EXPECT_LE(capped.engine.peak_velocity, capped.stpcalc.peak_velocity);
 }
@@ -186,10 +191,11 @@ TEST(StepcalcReport, JsonHasEveryKeyForStpcalcAndTheEngine) {
     ProfileReport r = make_report({total, 600, 100, 1000, 500, 250});
     nlohmann::json j = nlohmann::json::parse(report_json(r));
     ASSERT_TRUE(j.contains("engine"));
-    for (const char* key : {"acceleration_rate", "deceleration_rate", "velocity_resolution", "base_velocity",
-                            "running_velocity", "peak_velocity", "acceleration_pulses", "running_pulses",
-                            "deceleration_pulses", "acceleration_time_ms", "running_time_ms",
-                            "deceleration_time_ms", "total_time_ms"}) {
+    for (const char* key :
+         {"acceleration_rate", "deceleration_rate", "velocity_resolution", "base_velocity",
+          "running_velocity", "peak_velocity", "acceleration_pulses", "running_pulses",
+          "deceleration_pulses", "acceleration_time_ms", "running_time_ms", "deceleration_time_ms",
+          "total_time_ms"}) {
       ASSERT_TRUE(j.contains(key)) << key;
       ASSERT_TRUE(j["engine"].contains(key)) << key;
       EXPECT_TRUE(j[key].is_number()) << key;
@@ -209,7 +215,8 @@ TEST(StepcalcReport, AccelerationAboveTheMaximumUsefulValue) {
   EXPECT_NEAR(r.stpcalc.acceleration_time_ms, 900.0 * 149095 * 5 / 24576, 1e-6);
   EXPECT_DOUBLE_EQ(r.engine.acceleration_time_ms, ticks_to_ms(900 * 16384));
   std::string text = report_text(r);
-  EXPECT_NE(text.find("above its maximum useful value (AQ5-AQ4)/0.3 = 3000 mS"), std::string::npos) << text;
+  EXPECT_NE(text.find("above its maximum useful value (AQ5-AQ4)/0.3 = 3000 mS"), std::string::npos)
+      << text;
 }
 
 TEST(StepcalcReport, RefusesOutOfRangeInputsNamingTheRange) {
@@ -227,7 +234,8 @@ TEST(StepcalcReport, RefusesOutOfRangeInputsNamingTheRange) {
   EXPECT_NE(message({100, 600, 0, 1000, 500, 0}).find("1..8190"), std::string::npos);
   EXPECT_NE(message({100, 600, 100, 100, 500, 0}).find("101..8191"), std::string::npos);
   EXPECT_NE(message({100, 600, 100, 8192, 500, 0}).find("101..8191"), std::string::npos);
-  EXPECT_EQ(message({100, 600, 100, 1000, 3001, 0}), "accepted");  // above (1000-100)/0.3: legal (3.4.5)
+  EXPECT_EQ(message({100, 600, 100, 1000, 3001, 0}),
+            "accepted");  // above (1000-100)/0.3: legal (3.4.5)
   EXPECT_NE(message({100, 600, 100, 1000, 0, 0}).find("%AQ6"), std::string::npos);
   EXPECT_NE(message({100, 600, 100, 1000, 500, 27301}).find("%AQ7"), std::string::npos);
   EXPECT_NE(message({100, 600, 1, 8191, 27301, 0}).find("1..27300"), std::string::npos);

@@ -53,7 +53,8 @@ TEST(StepcalcSvg, WellFormedWithBothSeriesAxesAndLegend) {
     ASSERT_FALSE(els.empty());
     EXPECT_EQ(els.front().name, "svg");
     EXPECT_EQ(els.front().attributes.at("xmlns"), "http://www.w3.org/2000/svg");
-    for (const char* id : {"grid", "axes", "tick-labels", "legend"}) EXPECT_NE(find_id(els, id), nullptr) << id;
+    for (const char* id : {"grid", "axes", "tick-labels", "legend"})
+      EXPECT_NE(find_id(els, id), nullptr) << id;
     EXPECT_NE(svg.find(">time (ms)</text>"), std::string::npos);
     EXPECT_NE(svg.find(">velocity (pulses/s)</text>"), std::string::npos);
     EXPECT_NE(svg.find("STPCALC"), std::string::npos);
@@ -70,7 +71,8 @@ TEST(StepcalcSvg, WellFormedWithBothSeriesAxesAndLegend) {
         EXPECT_GE(y, 0);
         EXPECT_LE(y, 540);
       }
-      for (size_t i = 1; i < pts.size(); ++i) EXPECT_GE(pts[i].first, pts[i - 1].first - 1e-9) << id;
+      for (size_t i = 1; i < pts.size(); ++i)
+        EXPECT_GE(pts[i].first, pts[i - 1].first - 1e-9) << id;
     }
   }
 }

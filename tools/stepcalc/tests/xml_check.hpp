@@ -51,8 +51,8 @@ class XmlCheck {
   }
   std::string name() {
     size_t start = i_;
-    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '-' || s_[i_] == '_' ||
-                              s_[i_] == ':' || s_[i_] == '.'))
+    while (i_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[i_])) || s_[i_] == '-' ||
+                              s_[i_] == '_' || s_[i_] == ':' || s_[i_] == '.'))
       ++i_;
     if (i_ == start) fail("expected a name");
     return s_.substr(start, i_ - start);
@@ -64,7 +64,8 @@ class XmlCheck {
         size_t semi = s_.find(';', i_);
         if (semi == std::string::npos) fail("unterminated entity");
         std::string e = s_.substr(i_ + 1, semi - i_ - 1);
-        if (e != "amp" && e != "lt" && e != "gt" && e != "quot" && e != "apos" && (e.empty() || e[0] != '#'))
+        if (e != "amp" && e != "lt" && e != "gt" && e != "quot" && e != "apos" &&
+            (e.empty() || e[0] != '#'))
           fail("unknown entity &" + e + ";");
         i_ = semi;
       }
@@ -89,7 +90,8 @@ class XmlCheck {
       size_t start = i_;
       text_until(quote);
       if (i_ >= s_.size()) fail("unterminated attribute " + attr);
-      if (!el.attributes.emplace(attr, s_.substr(start, i_ - start)).second) fail("duplicate attribute " + attr);
+      if (!el.attributes.emplace(attr, s_.substr(start, i_ - start)).second)
+        fail("duplicate attribute " + attr);
       ++i_;
     }
     elements_.push_back(el);

@@ -38,9 +38,9 @@ Pattern pattern(const std::string& text) {
 // ---- 6041h: the state coding table (bits 6..0) ---------------------------------------------
 
 const std::vector<std::pair<State, const char*>> kStateTable = {
-    {State::NotReadyToSwitchOn, "0xx 0000"}, {State::SwitchOnDisabled, "1xx 0000"},
-    {State::ReadyToSwitchOn, "01x 0001"},    {State::SwitchedOn, "01x 0011"},
-    {State::OperationEnabled, "01x 0111"},   {State::QuickStopActive, "00x 0111"},
+    {State::NotReadyToSwitchOn, "0xx 0000"},  {State::SwitchOnDisabled, "1xx 0000"},
+    {State::ReadyToSwitchOn, "01x 0001"},     {State::SwitchedOn, "01x 0011"},
+    {State::OperationEnabled, "01x 0111"},    {State::QuickStopActive, "00x 0111"},
     {State::FaultReactionActive, "0xx 1111"}, {State::Fault, "0xx 1000"},
 };
 
@@ -50,7 +50,8 @@ TEST(DriveStatusword, EveryStatuswordIsTheStateWhoseRowItMatches) {
     for (const auto& [state, bits] : kStateTable)
       if (pattern(bits).matches(static_cast<uint16_t>(sw))) rows.push_back(state);
     ASSERT_LE(rows.size(), 1u) << "the table's rows overlap at " << sw;
-    EXPECT_EQ(decode_state(static_cast<uint16_t>(sw)), rows.empty() ? State::Unknown : rows[0]) << "6041h " << sw;
+    EXPECT_EQ(decode_state(static_cast<uint16_t>(sw)), rows.empty() ? State::Unknown : rows[0])
+        << "6041h " << sw;
   }
 }
 
@@ -60,28 +61,34 @@ TEST(DriveStatusword, StatesAreNamedAsTheStandardNamesThem) {
   EXPECT_STREQ(name(decode_state(0x0250)), "Switch on disabled");
   EXPECT_STREQ(name(decode_state(0x0231)), "Ready to switch on");
   EXPECT_STREQ(name(decode_state(0x0233)), "Switched on");
-  EXPECT_STREQ(name(decode_state(0x1637)), "Operation enabled");  // + target reached, set-point ack.
+  EXPECT_STREQ(name(decode_state(0x1637)),
+               "Operation enabled");  // + target reached, set-point ack.
   EXPECT_STREQ(name(decode_state(0x0217)), "Quick stop active");
   EXPECT_STREQ(name(decode_state(0x021F)), "Fault reaction active");
   EXPECT_STREQ(name(decode_state(0x0208)), "Fault");
-  EXPECT_STREQ(name(decode_state(0x0228)), "Fault");  // bit 5 is open ("x") in Fault
+  EXPECT_STREQ(name(decode_state(0x0228)), "Fault");          // bit 5 is open ("x") in Fault
   EXPECT_STREQ(name(decode_state(0x0201)), "unknown state");  // x0x0 0001: no row
-  EXPECT_TRUE(fault(State::Fault) && fault(State::FaultReactionActive) && !fault(State::QuickStopActive));
+  EXPECT_TRUE(fault(State::Fault) && fault(State::FaultReactionActive) &&
+              !fault(State::QuickStopActive));
 }
 
 TEST(DriveStatusword, BitsInWordsByMode) {
   using V = std::vector<std::string>;
   // 0x1637 in profile position: remote, target reached, set-point acknowledge.
-  EXPECT_EQ(status_bits(0x1637, 1), (V{"voltage enabled", "remote", "target reached", "set-point acknowledge"}));
+  EXPECT_EQ(status_bits(0x1637, 1),
+            (V{"voltage enabled", "remote", "target reached", "set-point acknowledge"}));
   // The same bits in profile velocity: velocity reached, speed zero.
-  EXPECT_EQ(status_bits(0x1637, 3), (V{"voltage enabled", "remote", "velocity reached", "speed zero"}));
+  EXPECT_EQ(status_bits(0x1637, 3),
+            (V{"voltage enabled", "remote", "velocity reached", "speed zero"}));
   // Homing: bit 12 homing attained, bit 13 homing error.
   EXPECT_EQ(status_bits(0x3637, 6),
             (V{"voltage enabled", "remote", "target reached", "homing attained", "homing error"}));
-  EXPECT_EQ(status_bits(0x2A37, 1), (V{"voltage enabled", "remote", "internal limit active", "following error"}));
+  EXPECT_EQ(status_bits(0x2A37, 1),
+            (V{"voltage enabled", "remote", "internal limit active", "following error"}));
   EXPECT_EQ(status_bits(0x0288, 0), (V{"fault", "warning", "remote"}));
-  EXPECT_EQ(status_bits(0xC100, 0), (V{"manufacturer-specific bit 8", "manufacturer-specific bit 14",
-                                       "manufacturer-specific bit 15"}));
+  EXPECT_EQ(status_bits(0xC100, 0),
+            (V{"manufacturer-specific bit 8", "manufacturer-specific bit 14",
+               "manufacturer-specific bit 15"}));
   EXPECT_TRUE(status_bits(0x0040, 1).empty());
 }
 
@@ -96,8 +103,9 @@ TEST(DriveStatusword, HomingStatusIsTheTableOfBits13_12_10) {
       {0b101, "homing error occurred, velocity is 0"},
   };
   for (const auto& [bits, text] : table) {
-    const uint16_t sw = static_cast<uint16_t>(0x0237 | ((bits & 4) ? 1u << 13 : 0) | ((bits & 2) ? 1u << 12 : 0) |
-                                              ((bits & 1) ? 1u << 10 : 0));
+    const uint16_t sw =
+        static_cast<uint16_t>(0x0237 | ((bits & 4) ? 1u << 13 : 0) | ((bits & 2) ? 1u << 12 : 0) |
+                              ((bits & 1) ? 1u << 10 : 0));
     EXPECT_EQ(homing_status(sw), text) << bits;
   }
   EXPECT_NE(homing_status(0x3237).find("reserved"), std::string::npos);
@@ -119,7 +127,15 @@ TEST(DriveStatusword, ModesAndErrorCodesByName) {
 // ---- 6040h and Table 26: a model drive written from the standard ----------------------------
 
 enum class Cmd {
-  None, Shutdown, SwitchOn, SwitchOnEnable, DisableVoltage, QuickStop, DisableOperation, EnableOperation, FaultReset
+  None,
+  Shutdown,
+  SwitchOn,
+  SwitchOnEnable,
+  DisableVoltage,
+  QuickStop,
+  DisableOperation,
+  EnableOperation,
+  FaultReset
 };
 
 // The command coding table (bits 7, 3..0); the shared codes are told apart by the state.
@@ -127,7 +143,8 @@ Cmd command(uint16_t cw, uint16_t previous, State s) {
   if ((cw & 0x80) && !(previous & 0x80)) return Cmd::FaultReset;  // 0 -> 1 of bit 7
   if (cw & 0x80) return Cmd::None;
   if (pattern("0xxx x110").matches(cw)) return Cmd::Shutdown;
-  if (pattern("0xxx 0111").matches(cw)) return s == State::OperationEnabled ? Cmd::DisableOperation : Cmd::SwitchOn;
+  if (pattern("0xxx 0111").matches(cw))
+    return s == State::OperationEnabled ? Cmd::DisableOperation : Cmd::SwitchOn;
   if (pattern("0xxx 1111").matches(cw))
     return s == State::ReadyToSwitchOn ? Cmd::SwitchOnEnable : Cmd::EnableOperation;
   if (pattern("0xxx xx0x").matches(cw)) return Cmd::DisableVoltage;
@@ -179,7 +196,8 @@ struct ModelDrive {
   // What the drive does by itself: transition 1 after initialisation, 14 after the fault
   // reaction.
   void run() {
-    if (state == State::NotReadyToSwitchOn) state = State::SwitchOnDisabled, transitions.push_back(1);
+    if (state == State::NotReadyToSwitchOn)
+      state = State::SwitchOnDisabled, transitions.push_back(1);
     if (state == State::FaultReactionActive) state = State::Fault, transitions.push_back(14);
   }
 };
@@ -193,7 +211,8 @@ std::vector<int> follow(Planner plan, State from, uint16_t controlword = 0) {
     if (!step) return d.transitions;
     for (uint16_t cw : step->controlwords) d.write(cw);
     if (step->controlwords.empty()) d.run();
-    EXPECT_NE(std::find(step->leads_to.begin(), step->leads_to.end(), d.state), step->leads_to.end())
+    EXPECT_NE(std::find(step->leads_to.begin(), step->leads_to.end(), d.state),
+              step->leads_to.end())
         << step->command << " from " << name(from) << " ended in " << name(d.state);
   }
   ADD_FAILURE() << "no end from " << name(from);
@@ -204,10 +223,14 @@ using Path = std::vector<int>;
 
 TEST(DriveEnable, FromEveryStateToOperationEnabledByTheStandardsTransitions) {
   const std::vector<std::pair<State, Path>> paths = {
-      {State::NotReadyToSwitchOn, {1, 2, 3, 4}}, {State::SwitchOnDisabled, {2, 3, 4}},
-      {State::ReadyToSwitchOn, {3, 4}},          {State::SwitchedOn, {4}},
-      {State::OperationEnabled, {}},             {State::QuickStopActive, {12, 2, 3, 4}},
-      {State::FaultReactionActive, {14, 15, 2, 3, 4}}, {State::Fault, {15, 2, 3, 4}},
+      {State::NotReadyToSwitchOn, {1, 2, 3, 4}},
+      {State::SwitchOnDisabled, {2, 3, 4}},
+      {State::ReadyToSwitchOn, {3, 4}},
+      {State::SwitchedOn, {4}},
+      {State::OperationEnabled, {}},
+      {State::QuickStopActive, {12, 2, 3, 4}},
+      {State::FaultReactionActive, {14, 15, 2, 3, 4}},
+      {State::Fault, {15, 2, 3, 4}},
   };
   for (const auto& [from, path] : paths) {
     EXPECT_EQ(follow(enable_step, from), path) << name(from);
@@ -217,11 +240,13 @@ TEST(DriveEnable, FromEveryStateToOperationEnabledByTheStandardsTransitions) {
 
 TEST(DriveEnable, TheControlwordsAreTheCommandCodingTables) {
   EXPECT_EQ(enable_step(State::SwitchOnDisabled, 0)->controlwords, std::vector<uint16_t>{0x0006});
-  EXPECT_EQ(enable_step(State::ReadyToSwitchOn, 0x0006)->controlwords, std::vector<uint16_t>{0x0007});
+  EXPECT_EQ(enable_step(State::ReadyToSwitchOn, 0x0006)->controlwords,
+            std::vector<uint16_t>{0x0007});
   EXPECT_EQ(enable_step(State::SwitchedOn, 0x0007)->controlwords, std::vector<uint16_t>{0x000F});
   // The fault reset is bit 7's rising edge: with bit 7 still 1 from before, 0 first.
   EXPECT_EQ(enable_step(State::Fault, 0x0000)->controlwords, std::vector<uint16_t>{0x0080});
-  EXPECT_EQ(enable_step(State::Fault, 0x0080)->controlwords, (std::vector<uint16_t>{0x0000, 0x0080}));
+  EXPECT_EQ(enable_step(State::Fault, 0x0080)->controlwords,
+            (std::vector<uint16_t>{0x0000, 0x0080}));
   EXPECT_EQ(enable_step(State::Fault, 0)->command, "Fault reset");
   // Waiting for the drive's own transitions: nothing written; the fault reaction may ramp.
   EXPECT_TRUE(enable_step(State::NotReadyToSwitchOn, 0)->controlwords.empty());
@@ -234,12 +259,14 @@ TEST(DriveEnable, TheControlwordsAreTheCommandCodingTables) {
 
 TEST(DriveDisable, DisableOperationThenShutdownToReadyToSwitchOn) {
   EXPECT_EQ(follow(disable_step, State::OperationEnabled, 0x000F), (Path{5, 6}));
-  EXPECT_EQ(disable_step(State::OperationEnabled, 0x000F)->controlwords, std::vector<uint16_t>{0x0007});
+  EXPECT_EQ(disable_step(State::OperationEnabled, 0x000F)->controlwords,
+            std::vector<uint16_t>{0x0007});
   EXPECT_TRUE(disable_step(State::OperationEnabled, 0x000F)->ramp);  // 605Ch 1: slow down first
   EXPECT_EQ(follow(disable_step, State::SwitchedOn, 0x0007), (Path{6}));
   EXPECT_EQ(follow(disable_step, State::QuickStopActive, 0x000B), (Path{12}));
   EXPECT_EQ(follow(disable_step, State::FaultReactionActive), (Path{14}));
-  for (State s : {State::ReadyToSwitchOn, State::SwitchOnDisabled, State::NotReadyToSwitchOn, State::Fault})
+  for (State s :
+       {State::ReadyToSwitchOn, State::SwitchOnDisabled, State::NotReadyToSwitchOn, State::Fault})
     EXPECT_FALSE(disable_step(s, 0)) << name(s);
 }
 
@@ -247,12 +274,13 @@ TEST(DriveQuickStop, QuickStopFromThePoweredStates) {
   // 0x0B is the Quick stop command of the coding table in every state.
   for (State s : {State::OperationEnabled, State::SwitchedOn, State::ReadyToSwitchOn})
     EXPECT_EQ(command(0x000B, 0x000F, s), Cmd::QuickStop);
-  EXPECT_EQ(quick_stop_step(State::OperationEnabled, 0x000F)->controlwords, std::vector<uint16_t>{0x000B});
+  EXPECT_EQ(quick_stop_step(State::OperationEnabled, 0x000F)->controlwords,
+            std::vector<uint16_t>{0x000B});
   EXPECT_EQ(follow(quick_stop_step, State::OperationEnabled, 0x000F), (Path{11}));
   EXPECT_EQ(follow(quick_stop_step, State::SwitchedOn, 0x0007), (Path{10}));
   EXPECT_EQ(follow(quick_stop_step, State::ReadyToSwitchOn, 0x0006), (Path{7}));
-  for (State s : {State::SwitchOnDisabled, State::NotReadyToSwitchOn, State::QuickStopActive, State::Fault,
-                  State::FaultReactionActive})
+  for (State s : {State::SwitchOnDisabled, State::NotReadyToSwitchOn, State::QuickStopActive,
+                  State::Fault, State::FaultReactionActive})
     EXPECT_FALSE(quick_stop_step(s, 0)) << name(s);
 }
 
@@ -261,7 +289,8 @@ TEST(DriveFaultReset, RisingEdgeOfBit7FromFault) {
   EXPECT_EQ(follow(fault_reset_step, State::Fault, 0x0080), (Path{15}));  // 0x00, then 0x80
   EXPECT_EQ(follow(fault_reset_step, State::Fault, 0x008F), (Path{15}));
   EXPECT_EQ(follow(fault_reset_step, State::FaultReactionActive), (Path{14, 15}));
-  for (State s : {State::SwitchOnDisabled, State::ReadyToSwitchOn, State::OperationEnabled, State::QuickStopActive})
+  for (State s : {State::SwitchOnDisabled, State::ReadyToSwitchOn, State::OperationEnabled,
+                  State::QuickStopActive})
     EXPECT_FALSE(fault_reset_step(s, 0)) << name(s);
 }
 
@@ -272,7 +301,8 @@ TEST(DriveProfilePosition, SetPointControlwordBits) {
   EXPECT_EQ(set_point_controlword(false, true), 0x005F);
   EXPECT_EQ(set_point_controlword(true, true), 0x007F);
   // Still Enable operation to the state machine (bits 4..6 are the mode's).
-  EXPECT_EQ(command(set_point_controlword(true, true), 0x000F, State::OperationEnabled), Cmd::EnableOperation);
+  EXPECT_EQ(command(set_point_controlword(true, true), 0x000F, State::OperationEnabled),
+            Cmd::EnableOperation);
 }
 
 }  // namespace

@@ -84,8 +84,10 @@ TEST(HpProgram, ListingRulesAndMistakes) {
   ASSERT_EQ(c.size(), 3u);
   EXPECT_EQ(c[1].channel, 2);
   EXPECT_EQ(c[1].words, "POS? ");
-  EXPECT_EQ(parse_hp_program("10 OUTPUT 709;\"POS 1 ! not a comment\"\n")[0].text, "POS 1 ! not a comment");
-  EXPECT_THROW(parse_hp_program("10 OUTPUT 709;\"POS 0\"\nOUTPUT 709;\"POS 1\"\n"), std::invalid_argument);
+  EXPECT_EQ(parse_hp_program("10 OUTPUT 709;\"POS 1 ! not a comment\"\n")[0].text,
+            "POS 1 ! not a comment");
+  EXPECT_THROW(parse_hp_program("10 OUTPUT 709;\"POS 0\"\nOUTPUT 709;\"POS 1\"\n"),
+               std::invalid_argument);
   EXPECT_THROW(parse_hp_program("10 GOTO 10\n"), std::invalid_argument);
   EXPECT_THROW(parse_hp_program("10 OUTPUT 709;POS 0\n"), std::invalid_argument);
   EXPECT_THROW(parse_hp_program("! only a comment\n"), std::invalid_argument);

@@ -33,7 +33,9 @@ Result run(const std::string& args) {
   return r;
 }
 
-uint32_t random_domain() { return 50 + (std::random_device{}() ^ static_cast<uint32_t>(getpid())) % 180; }
+uint32_t random_domain() {
+  return 50 + (std::random_device{}() ^ static_cast<uint32_t>(getpid())) % 180;
+}
 
 TEST(StepwatchCli, OnceJsonPrintsEveryNodeAndAxisOfALateJoin) {
   uint32_t domain = random_domain();
@@ -104,8 +106,9 @@ TEST(StepwatchCli, LiveJsonStreamsSamples) {
 }
 
 TEST(StepwatchCli, BadArgumentsExit2WithOneLine) {
-  for (const char* args : {"--domain 300", "--ros2-prefix x", "--wait-ms 5", "--bogus", "--ros2 --ros2-prefix a//b",
-                           "--once --count 3", "--once --profiles /nonexistent/stepwatch.xml"}) {
+  for (const char* args :
+       {"--domain 300", "--ros2-prefix x", "--wait-ms 5", "--bogus", "--ros2 --ros2-prefix a//b",
+        "--once --count 3", "--once --profiles /nonexistent/stepwatch.xml"}) {
     Result r = run(args);
     EXPECT_EQ(r.status, 2) << args << ": " << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;

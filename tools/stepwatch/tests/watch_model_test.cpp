@@ -34,7 +34,8 @@ namespace {
   return bridge::dds::to_idl(h);
 }
 
-::stepnode::DriveStatus drive(uint8_t node, uint8_t axis, uint16_t statusword, int8_t mode, int32_t position) {
+::stepnode::DriveStatus drive(uint8_t node, uint8_t axis, uint16_t statusword, int8_t mode,
+                              int32_t position) {
   bridge::DriveStatusSample d;
   d.node = node;
   d.axis = axis;
@@ -108,7 +109,8 @@ TEST(WatchModel, TableHasANodeLineAndOneLinePerAxis) {
   m.on_position(position(5, 1, -1234, -60));
   std::string t = m.table();
   EXPECT_NE(t.find("   5 LOST stepnode 2 axes"), std::string::npos) << t;
-  EXPECT_NE(t.find("        1        -1234            0       -60     2   0x10  stalled position_valid accelerating moving"),
+  EXPECT_NE(t.find("        1        -1234            0       -60     2   0x10  stalled "
+                   "position_valid accelerating moving"),
             std::string::npos)
       << t;
 }
@@ -116,27 +118,33 @@ TEST(WatchModel, TableHasANodeLineAndOneLinePerAxis) {
 TEST(WatchModel, StatusWords) {
   EXPECT_EQ(status_words(status(1, 1, 0)), "-");
   EXPECT_EQ(status_words(status(1, 1, 0xFF9F)),
-            "estop lower_limit upper_limit illegal_move stalled power_up position_valid resumable axis2 axis3 at_home "
+            "estop lower_limit upper_limit illegal_move stalled power_up position_valid resumable "
+            "axis2 axis3 at_home "
             "accelerating decelerating moving");
 }
 
 TEST(WatchModel, CsvRowsShareOneHeader) {
   std::string header = csv_header();
   EXPECT_EQ(header,
-            "recv_time_ns,topic,node,axis,status_bits,motor_position,encoder_position,velocity,motion_phase,"
+            "recv_time_ns,topic,node,axis,status_bits,motor_position,encoder_position,velocity,"
+            "motion_phase,"
             "sync_counter,state,code,text,can_time_ns,publish_time_ns\n");
-  EXPECT_EQ(csv_row(10, status(5, 1, 0x8100)), "10,AxisStatus,5,1,0x8100,,,,,,,,\"position_valid moving\",0,\n");
+  EXPECT_EQ(csv_row(10, status(5, 1, 0x8100)),
+            "10,AxisStatus,5,1,0x8100,,,,,,,,\"position_valid moving\",0,\n");
   EXPECT_EQ(csv_row(11, position(5, 2, 42, -7)), "11,AxisPosition,5,2,,42,0,-7,2,0,,,,0,0\n");
-  EXPECT_EQ(csv_row(12, health(5, bridge::NodeState::Operational)), "12,NodeHealth,5,,,,,,,,OPERATIONAL,0x0000,\"stepnode\",,\n");
+  EXPECT_EQ(csv_row(12, health(5, bridge::NodeState::Operational)),
+            "12,NodeHealth,5,,,,,,,,OPERATIONAL,0x0000,\"stepnode\",,\n");
   bridge::EmergencySample e;
   e.node = 5;
   e.code = 0x8130;
   e.text = "heartbeat \"lost\"";
-  EXPECT_EQ(csv_row(13, bridge::dds::to_idl(e)), "13,Emergency,5,,,,,,,,,0x8130,\"heartbeat \"\"lost\"\"\",0,\n");
+  EXPECT_EQ(csv_row(13, bridge::dds::to_idl(e)),
+            "13,Emergency,5,,,,,,,,,0x8130,\"heartbeat \"\"lost\"\"\",0,\n");
   EXPECT_EQ(csv_disposed_row(14, "AxisStatus", 5, 1), "14,AxisStatus,5,1,,,,,,,DISPOSED,,,,\n");
   // Every row has the header's 15 columns.
   for (const std::string& row : {csv_row(10, status(5, 1, 0)), csv_row(11, position(5, 2, 42, -7))})
-    EXPECT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ','));
+    EXPECT_EQ(std::count(row.begin(), row.end(), ','),
+              std::count(header.begin(), header.end(), ','));
 }
 
 TEST(WatchModel, ACia402AxisShowsItsDriveState) {
@@ -151,7 +159,8 @@ TEST(WatchModel, ACia402AxisShowsItsDriveState) {
   EXPECT_EQ(lines[1]["drive"]["position_actual"], 4000);
   EXPECT_TRUE(lines[1]["status"].is_null());
   std::string t = m.table();
-  EXPECT_NE(t.find("        1         4000            -       300     -      -  402: Operation enabled, pp target_reached"),
+  EXPECT_NE(t.find("        1         4000            -       300     -      -  402: Operation "
+                   "enabled, pp target_reached"),
             std::string::npos)
       << t;
   // A Horner axis has no "drive" key (the JSON as before).
@@ -161,7 +170,8 @@ TEST(WatchModel, ACia402AxisShowsItsDriveState) {
   m.on_drive(drive(6, 1, 0x0218, 1, 4000));
   EXPECT_EQ(drive_words(m.axes().begin()->second.drive.value()), "Fault, pp");
   EXPECT_EQ(csv_row(15, drive(6, 1, 0x0637, 8, -5)),
-            "15,DriveStatus,6,1,0x0637,-5,,300,,,Operation enabled,0x0000,\"Operation enabled, csp target_reached\",0,0\n");
+            "15,DriveStatus,6,1,0x0637,-5,,300,,,Operation enabled,0x0000,\"Operation enabled, csp "
+            "target_reached\",0,0\n");
   m.on_axis_disposed(6, 1);
   EXPECT_EQ(m.axes().size(), 1u);
 }

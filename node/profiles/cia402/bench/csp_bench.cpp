@@ -60,7 +60,8 @@ Figures run(int hz, int cycles, double amplitude, double period_s, double jitter
   for (int k = 1; k <= cycles; ++k) {
     const Tick t = cycle * k + static_cast<Tick>(jitter(rng) * kClockHz / 1e6);
     drive.advance(t);
-    const auto target = static_cast<int32_t>(std::lround(amplitude * std::sin(2 * M_PI * k / (hz * period_s))));
+    const auto target =
+        static_cast<int32_t>(std::lround(amplitude * std::sin(2 * M_PI * k / (hz * period_s))));
     drive.set_target_position(target);
     targets.push_back(target);
     drive.sync(t, t);
@@ -81,7 +82,8 @@ Figures run(int hz, int cycles, double amplitude, double period_s, double jitter
     const int64_t n = std::llabs(g.to - g.from);
     const Tick len = k + 1 < segments.size() ? segments[k + 1].start - g.start : cycle;
     for (int64_t i = 1; i <= n && s < motor.times.size(); ++i, ++s) {
-      const double ideal = static_cast<double>(g.start) + static_cast<double>(i) * static_cast<double>(len) / n;
+      const double ideal =
+          static_cast<double>(g.start) + static_cast<double>(i) * static_cast<double>(len) / n;
       if (motor.times[s] > (k + 1 < segments.size() ? segments[k + 1].start : INT64_MAX)) break;
       const double err = std::fabs(static_cast<double>(motor.times[s]) - ideal) * 1e9 / kClockHz;
       f.worst_ns = std::max(f.worst_ns, err);
@@ -95,8 +97,10 @@ Figures run(int hz, int cycles, double amplitude, double period_s, double jitter
   int64_t x = 0;
   for (size_t i = 0; i < motor.times.size(); ++i) {
     x = motor.history[i];
-    const double c = static_cast<double>(motor.times[i]) / static_cast<double>(cycle) - 1;  // cycles since SYNC 1
-    const auto k = static_cast<size_t>(std::clamp<double>(std::floor(c), 0, static_cast<double>(targets.size() - 1)));
+    const double c = static_cast<double>(motor.times[i]) / static_cast<double>(cycle) -
+                     1;  // cycles since SYNC 1
+    const auto k = static_cast<size_t>(
+        std::clamp<double>(std::floor(c), 0, static_cast<double>(targets.size() - 1)));
     const double p0 = k == 0 ? 0 : targets[k - 1], p1 = targets[k];
     const double ideal = p0 + (p1 - p0) * std::clamp(c - static_cast<double>(k), 0.0, 1.0);
     f.worst_steps = std::max(f.worst_steps, std::fabs(ideal - static_cast<double>(x)));
@@ -119,9 +123,11 @@ int main() {
                        Case{"1 kHz SYNC, jitter +-50 us", 1000, 4000, 20000, 2, 50},
                        Case{"100 Hz SYNC, jitter +-500 us", 100, 400, 20000, 2, 500}}) {
     const Figures f = run(c.hz, c.cycles, c.amplitude, c.period_s, c.jitter_us);
-    std::printf("%-34s %8zu %10.1f %9.1f %14.2f\n", c.name, f.steps, f.worst_ns, f.mean_ns, f.worst_steps);
+    std::printf("%-34s %8zu %10.1f %9.1f %14.2f\n", c.name, f.steps, f.worst_ns, f.mean_ns,
+                f.worst_steps);
   }
-  std::printf("ns: each step against the drive's interpolation between the SYNCs as they arrived\n"
-              "*: the position after each step against the master's trajectory on its own clock\n");
+  std::printf(
+      "ns: each step against the drive's interpolation between the SYNCs as they arrived\n"
+      "*: the position after each step against the master's trajectory on its own clock\n");
   return 0;
 }

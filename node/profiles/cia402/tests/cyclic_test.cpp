@@ -41,8 +41,8 @@ std::vector<int32_t> master_trajectory() {
 
 // Every step against the ideal: the step to position x falls when the interpolated
 // trajectory (from the position at SYNC k to set-point k over one cycle) reaches x.
-void expect_on_trajectory(const std::vector<sim::TracedStep>& steps, const std::vector<int32_t>& targets,
-                          Tick cycle, Tick first) {
+void expect_on_trajectory(const std::vector<sim::TracedStep>& steps,
+                          const std::vector<int32_t>& targets, Tick cycle, Tick first) {
   size_t s = 0;
   int64_t pos = 0;
   Tick worst = 0;
@@ -51,8 +51,10 @@ void expect_on_trajectory(const std::vector<sim::TracedStep>& steps, const std::
     const int64_t from = pos, n = std::llabs(targets[k] - from);
     for (int64_t i = 1; i <= n; ++i, ++s) {
       ASSERT_LT(s, steps.size());
-      const double ideal = static_cast<double>(start) + static_cast<double>(i) * static_cast<double>(cycle) / n;
-      worst = std::max<Tick>(worst, std::llabs(steps[s].time - static_cast<Tick>(std::llround(ideal))));
+      const double ideal =
+          static_cast<double>(start) + static_cast<double>(i) * static_cast<double>(cycle) / n;
+      worst =
+          std::max<Tick>(worst, std::llabs(steps[s].time - static_cast<Tick>(std::llround(ideal))));
       pos += steps[s].direction;
     }
     ASSERT_EQ(pos, targets[k]) << "after cycle " << k;
@@ -76,9 +78,11 @@ TEST_F(Cyclic, CspAt1kHzFollowsTheLinearInterpolationToATick) {
 TEST_F(Cyclic, CspAt100HzToo) {
   enable(Mode::CyclicSyncPosition);
   const Tick cycle = kClockHz / 100;
-  drive.parameters().interpolation_period = cycle;  // 60C2h: the first cycle, before SYNCs are timed
+  drive.parameters().interpolation_period =
+      cycle;  // 60C2h: the first cycle, before SYNCs are timed
   std::vector<int32_t> targets;
-  for (int k = 1; k <= 100; ++k) targets.push_back(static_cast<int32_t>(std::lround(2000 * std::sin(k * 0.05))));
+  for (int k = 1; k <= 100; ++k)
+    targets.push_back(static_cast<int32_t>(std::lround(2000 * std::sin(k * 0.05))));
   for (size_t k = 0; k < targets.size(); ++k) sync_to(cycle * static_cast<Tick>(k + 1), targets[k]);
   drive.advance(now += 2 * cycle);
   expect_on_trajectory(motor.steps, targets, cycle, cycle);
@@ -110,7 +114,7 @@ TEST_F(Cyclic, AMissedSyncHoldsTheLastSetPoint) {
   enable(Mode::CyclicSyncPosition);
   const Tick cycle = kClockHz / 1000;
   for (int k = 1; k <= 10; ++k) sync_to(cycle * k, 10 * k);
-  drive.advance(now = 12 * cycle);  // SYNC 11 does not come
+  drive.advance(now = 12 * cycle);          // SYNC 11 does not come
   EXPECT_EQ(drive.position_actual(), 100);  // no extrapolation
   drive.advance(now = 13 * cycle);
   EXPECT_EQ(drive.position_actual(), 100);
@@ -132,7 +136,8 @@ TEST_F(Cyclic, ASyncBurstIsNotTheCycleAndANewPeriodIsTaken) {
   EXPECT_EQ(drive.position_actual(), 2000);
   // At the steady period each segment is spread over the whole cycle: 20 steps in 10 ms.
   const size_t n = motor.steps.size();
-  EXPECT_NEAR(static_cast<double>(motor.steps[n - 1].time - motor.steps[n - 20].time), 19.0 * cycle / 20, cycle / 20);
+  EXPECT_NEAR(static_cast<double>(motor.steps[n - 1].time - motor.steps[n - 20].time),
+              19.0 * cycle / 20, cycle / 20);
 }
 
 TEST_F(Cyclic, CsvChangesTheVelocityAtEachSyncWithoutLosingAStep) {

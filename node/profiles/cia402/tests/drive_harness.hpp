@@ -26,7 +26,8 @@ constexpr uint16_t kStateMask = 0x006F;
 constexpr uint16_t kSwitchOnDisabled = 0x0040, kReadyToSwitchOn = 0x0021, kSwitchedOn = 0x0023,
                    kOperationEnabled = 0x0027, kQuickStopActive = 0x0007, kFault = 0x0008;
 // Bits 10..13 (6041h): target reached, internal limit active, the two mode-specific ones.
-constexpr uint16_t kTargetReached = 1u << 10, kInternalLimit = 1u << 11, kBit12 = 1u << 12, kBit13 = 1u << 13;
+constexpr uint16_t kTargetReached = 1u << 10, kInternalLimit = 1u << 11, kBit12 = 1u << 12,
+                   kBit13 = 1u << 13;
 
 // A simulated motor that keeps every step pulse it received.
 struct RecordingMachine : sim::AxisMachine {

@@ -31,8 +31,8 @@ Pattern pattern(const std::string& text) {
 }
 
 // The controlwords of the command coding table with every open bit 0.
-constexpr uint16_t kShutdown = 0x0006, kSwitchOn = 0x0007, kEnable = 0x000F, kDisableVoltage = 0x0000,
-                   kQuickStop = 0x0002, kFaultReset = 0x0080;
+constexpr uint16_t kShutdown = 0x0006, kSwitchOn = 0x0007, kEnable = 0x000F,
+                   kDisableVoltage = 0x0000, kQuickStop = 0x0002, kFaultReset = 0x0080;
 
 // ---- controlword: the command coding table ----------------------------------------------
 
@@ -42,8 +42,9 @@ struct CommandRow {
 };
 // Bit 7 must be 0 for every row but the fault reset (its rising edge, tested below).
 const std::vector<CommandRow> kCommandTable = {
-    {Command::Shutdown, "0x110"},  {Command::SwitchOn, "00111"},       {Command::SwitchOnAndEnable, "01111"},
-    {Command::DisableVoltage, "0xx0x"}, {Command::QuickStop, "0x01x"}, {Command::DisableOperation, "00111"},
+    {Command::Shutdown, "0x110"},          {Command::SwitchOn, "00111"},
+    {Command::SwitchOnAndEnable, "01111"}, {Command::DisableVoltage, "0xx0x"},
+    {Command::QuickStop, "0x01x"},         {Command::DisableOperation, "00111"},
     {Command::EnableOperation, "01111"},
 };
 
@@ -60,8 +61,11 @@ TEST(ControlwordDecode, EveryControlwordIsExactlyTheRowsItMatches) {
       EXPECT_EQ(decoded, rows[0]) << "cw " << cw;
     } else {  // the two shared codes: switch on / disable operation, switch on + enable / enable
       ASSERT_EQ(rows.size(), 2u) << "cw " << cw;
-      EXPECT_EQ(decoded, rows[0] == Command::SwitchOn ? Command::SwitchOn : Command::SwitchOnAndEnable) << cw;
-      EXPECT_EQ(rows[1], rows[0] == Command::SwitchOn ? Command::DisableOperation : Command::EnableOperation);
+      EXPECT_EQ(decoded,
+                rows[0] == Command::SwitchOn ? Command::SwitchOn : Command::SwitchOnAndEnable)
+          << cw;
+      EXPECT_EQ(rows[1], rows[0] == Command::SwitchOn ? Command::DisableOperation
+                                                      : Command::EnableOperation);
     }
   }
 }
@@ -72,14 +76,15 @@ TEST(ControlwordDecode, TheStateDecidesTheSharedCodes) {
   EXPECT_EQ(decode(kEnable, 0, State::ReadyToSwitchOn), Command::SwitchOnAndEnable);
   for (State s : {State::SwitchedOn, State::OperationEnabled, State::QuickStopActive})
     EXPECT_EQ(decode(kEnable, 0, s), Command::EnableOperation) << name(s);
-  EXPECT_EQ(decode(0x0076, 0, State::OperationEnabled), Command::Shutdown);  // bits 4-6 do not count
+  EXPECT_EQ(decode(0x0076, 0, State::OperationEnabled),
+            Command::Shutdown);  // bits 4-6 do not count
 }
 
 TEST(ControlwordDecode, FaultResetIsTheRisingEdgeOfBit7Only) {
   for (uint16_t low = 0; low < 0x80; ++low) {
     const auto cw = static_cast<uint16_t>(low | kFaultReset);
-    EXPECT_EQ(decode(cw, low), Command::FaultReset) << cw;   // 0 -> 1, bits 3..0 whatever
-    EXPECT_EQ(decode(cw, cw), Command::None) << cw;           // held at 1: no row matches
+    EXPECT_EQ(decode(cw, low), Command::FaultReset) << cw;  // 0 -> 1, bits 3..0 whatever
+    EXPECT_EQ(decode(cw, cw), Command::None) << cw;         // held at 1: no row matches
   }
   EXPECT_EQ(decode(kShutdown, kFaultReset), Command::Shutdown);  // 1 -> 0: an ordinary command
 }
@@ -88,7 +93,7 @@ TEST(ControlwordDecode, FaultResetIsTheRisingEdgeOfBit7Only) {
 
 struct StateRow {
   State state;
-  const char* bits;  // 6041h bits 7..0
+  const char* bits;      // 6041h bits 7..0
   bool voltage_enabled;  // bit 4: this drive's choice, the motor powered
 };
 const std::vector<StateRow> kStateTable = {
@@ -104,7 +109,7 @@ TEST(StatuswordBits, EachStateAsTheTable) {
     EXPECT_TRUE(pattern(row.bits).matches(bits)) << name(row.state) << " " << bits;
     EXPECT_EQ((bits & sw::kVoltageEnabled) != 0, row.voltage_enabled) << name(row.state);
     EXPECT_EQ(powered(row.state), row.voltage_enabled) << name(row.state);
-    EXPECT_NE(bits & sw::kRemote, 0) << name(row.state);  // bit 9: the controlword is processed
+    EXPECT_NE(bits & sw::kRemote, 0) << name(row.state);      // bit 9: the controlword is processed
     EXPECT_EQ(bits & ~sw::kOwnedBits, 0) << name(row.state);  // 7, 8, 10-15 are the caller's
     // Every other state's pattern excludes this one: the coding is unambiguous.
     for (const StateRow& other : kStateTable) {
@@ -139,7 +144,8 @@ class Transition : public ::testing::Test {
 
 TEST_F(Transition, T00_StartIntoNotReadyToSwitchOn) {
   expect(State::NotReadyToSwitchOn, 0);
-  EXPECT_EQ(m.on_controlword(kShutdown), Stop::None);  // no command leaves it: transition 1 is automatic
+  EXPECT_EQ(m.on_controlword(kShutdown),
+            Stop::None);  // no command leaves it: transition 1 is automatic
   expect(State::NotReadyToSwitchOn, 0);
 }
 
@@ -366,9 +372,9 @@ TEST_F(Transition, DisableOperationOptionCodes) {  // 605Ch: transition 5
 
 TEST_F(Transition, CommandsDuringASlowDownRamp) {
   go(State::OperationEnabled);
-  m.on_controlword(kSwitchOn);                                  // 605Ch 1: transition 5 waits
-  EXPECT_EQ(m.on_controlword(kSwitchOn), Stop::None);           // the same command: no change
-  EXPECT_EQ(m.on_controlword(kEnable), Stop::None);             // enable again: called off
+  m.on_controlword(kSwitchOn);                         // 605Ch 1: transition 5 waits
+  EXPECT_EQ(m.on_controlword(kSwitchOn), Stop::None);  // the same command: no change
+  EXPECT_EQ(m.on_controlword(kEnable), Stop::None);    // enable again: called off
   EXPECT_TRUE(m.operation_enabled());
   m.motion_stopped();
   expect(State::OperationEnabled, 4);
@@ -382,8 +388,8 @@ TEST_F(Transition, CommandsDuringASlowDownRamp) {
 }
 
 TEST_F(Transition, FaultReactionOptionCodes) {  // 605Eh: transitions 13 and 14
-  const Stop stops[] = {Stop::DisableDrive, Stop::SlowDownRamp, Stop::QuickStopRamp, Stop::Immediate,
-                        Stop::Immediate};
+  const Stop stops[] = {Stop::DisableDrive, Stop::SlowDownRamp, Stop::QuickStopRamp,
+                        Stop::Immediate, Stop::Immediate};
   for (int16_t option = 0; option <= 4; ++option) {
     SCOPED_TRACE("605Eh = " + std::to_string(option));
     m.set_options({.fault_reaction = option});
@@ -427,7 +433,7 @@ TEST_F(Transition, FaultResetOnTheRisingEdgeOnly) {
   m.on_controlword(kSwitchOn | kFaultReset);  // held: no edge
   expect(State::Fault, 14);
   m.on_controlword(kSwitchOn);
-  expect(State::Fault, 14);                    // falling edge: nothing
+  expect(State::Fault, 14);                   // falling edge: nothing
   m.on_controlword(kSwitchOn | kFaultReset);  // rising edge
   expect(State::SwitchOnDisabled, 15);
 }

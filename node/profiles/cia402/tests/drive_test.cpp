@@ -48,7 +48,7 @@ TEST_F(DriveTest, ProfilePositionRunsTheTrapezoidWithTheSetPointHandshake) {
   set_profile(1000, 10'000, 10'000);
   EXPECT_TRUE(drive.statusword() & kTargetReached);
   drive.set_target_position(1000);
-  cw(0x1F);  // new set-point, absolute
+  cw(0x1F);                                  // new set-point, absolute
   EXPECT_TRUE(drive.statusword() & kBit12);  // set-point acknowledge
   EXPECT_FALSE(drive.statusword() & kTargetReached);
   cw(0x0F);
@@ -141,7 +141,7 @@ TEST_F(DriveTest, HaltStopsWithTheProfileDecelerationAndShowsTargetReached) {
   const int64_t at = motor.position();
   cw(0x010F);  // halt
   run(ms(300));
-  EXPECT_EQ(state(), kOperationEnabled);  // a halt is no state change
+  EXPECT_EQ(state(), kOperationEnabled);                           // a halt is no state change
   EXPECT_NEAR(static_cast<double>(motor.position() - at), 50, 2);  // v^2 / 2d
   EXPECT_TRUE(drive.statusword() & kTargetReached);
   cw(0x0F);

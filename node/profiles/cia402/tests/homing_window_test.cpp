@@ -110,9 +110,9 @@ class HomeSwitchBetweenLimits : public DriveAxis {
       bool reverses;
     };
     const std::vector<Start> starts = {
-        {kSwitchFrom - 3500, initial, initial < 0},  // below
+        {kSwitchFrom - 3500, initial, initial < 0},           // below
         {(kSwitchFrom + kSwitchTo) / 2, toward_edge, false},  // on the switch
-        {kSwitchTo + 1500, initial, initial > 0},  // above
+        {kSwitchTo + 1500, initial, initial > 0},             // above
     };
     drive.parameters().home_offset = 250;
     for (const Start& s : starts) {
@@ -124,9 +124,11 @@ class HomeSwitchBetweenLimits : public DriveAxis {
       EXPECT_EQ(drive.position_actual(), 250);  // 607Ch at the home position
       EXPECT_EQ(r.first_direction, s.first_direction);
       if (s.reverses) {
-        EXPECT_TRUE(initial > 0 ? r.highest >= kPositiveLimit : r.lowest <= kNegativeLimit) << "no reversal";
+        EXPECT_TRUE(initial > 0 ? r.highest >= kPositiveLimit : r.lowest <= kNegativeLimit)
+            << "no reversal";
       } else {
-        EXPECT_TRUE(r.highest < kPositiveLimit && r.lowest > kNegativeLimit) << "went to a limit switch";
+        EXPECT_TRUE(r.highest < kPositiveLimit && r.lowest > kNegativeLimit)
+            << "went to a limit switch";
       }
     }
   }

@@ -85,7 +85,7 @@ const std::vector<Row> kTable = {
     {0x60B1, 0, DT::Integer32, RW, true, false, 0},
     {0x60C0, 0, DT::Integer16, RW, false, true, 0},  // linear interpolation
     {0x60C1, 1, DT::Integer32, RW, true, false, 0},
-    {0x60C2, 1, DT::Unsigned8, RW, false, true, 1},   // 1 ms = 1 * 10^-3 s
+    {0x60C2, 1, DT::Unsigned8, RW, false, true, 1},  // 1 ms = 1 * 10^-3 s
     {0x60C2, 2, DT::Integer8, RW, false, true, -3},
     {0x60F4, 0, DT::Integer32, RO, true, false, 0},
     {0x60FD, 0, DT::Unsigned32, RO, true, false, 0},
@@ -152,7 +152,8 @@ TEST_F(Cia402Objects, EachObjectAsTheStandardDescribesIt) {
 }
 
 TEST_F(Cia402Objects, SampledValuesAreThePositionsAndVelocities) {
-  for (uint16_t index : {0x6062, 0x6063, 0x6064, 0x606C, 0x60F4}) EXPECT_TRUE(od.at(index, 0).pdo_sampled);
+  for (uint16_t index : {0x6062, 0x6063, 0x6064, 0x606C, 0x60F4})
+    EXPECT_TRUE(od.at(index, 0).pdo_sampled);
   for (uint16_t index : {0x6041, 0x6061, 0x60FD, 0x603F}) EXPECT_FALSE(od.at(index, 0).pdo_sampled);
 }
 
@@ -177,8 +178,8 @@ TEST_F(Cia402Objects, OptionCodesTakeTheStandardsValuesOnly) {
     int16_t low, high;
   };
   // 605Ah 0..8, 605Bh/605Ch 0..1, 605Dh 1..4 (0 reserved), 605Eh 0..4, 6007h 0..3.
-  for (Range r : {Range{0x605A, 0, 8}, Range{0x605B, 0, 1}, Range{0x605C, 0, 1}, Range{0x605D, 1, 4},
-                  Range{0x605E, 0, 4}, Range{0x6007, 0, 3}}) {
+  for (Range r : {Range{0x605A, 0, 8}, Range{0x605B, 0, 1}, Range{0x605C, 0, 1},
+                  Range{0x605D, 1, 4}, Range{0x605E, 0, 4}, Range{0x6007, 0, 3}}) {
     SCOPED_TRACE(testing::Message() << std::hex << r.index);
     EXPECT_EQ(write<int16_t>(r.index, 0, r.low), SdoAbort::None);
     EXPECT_EQ(write<int16_t>(r.index, 0, r.high), SdoAbort::None);

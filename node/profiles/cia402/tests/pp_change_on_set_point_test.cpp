@@ -35,7 +35,8 @@ class ChangeOnSetPoint : public DriveAxis {
   // from its interval to the step before.
   double velocity_at(int64_t position) const {
     const auto k = static_cast<size_t>(position - 1);
-    return static_cast<double>(kClockHz) / static_cast<double>(motor.steps.at(k).time - motor.steps.at(k - 1).time);
+    return static_cast<double>(kClockHz) /
+           static_cast<double>(motor.steps.at(k).time - motor.steps.at(k - 1).time);
   }
   // The slowest step between two positions (upward from 0).
   double slowest_between(int64_t from, int64_t to) const {
@@ -51,7 +52,8 @@ class ChangeOnSetPoint : public DriveAxis {
 // at x2, at v2 from x1 on: the trapezoid's pieces at acceleration a.
 double through_time(double x1, double v1, double x2, double v2, double a) {
   const double up = v1 / a, up_steps = v1 * v1 / (2 * a);
-  const double change = std::fabs(v2 - v1) / a, change_steps = std::fabs(v2 * v2 - v1 * v1) / (2 * a);
+  const double change = std::fabs(v2 - v1) / a,
+               change_steps = std::fabs(v2 * v2 - v1 * v1) / (2 * a);
   const double down = v2 / a, down_steps = v2 * v2 / (2 * a);
   return up + (x1 - up_steps) / v1 + change + (x2 - x1 - change_steps - down_steps) / v2 + down;
 }
@@ -75,7 +77,8 @@ TEST_F(ChangeOnSetPoint, TheAxisRunsThroughTheFirstTargetAtItsVelocityThenAtTheN
   EXPECT_NEAR(velocity_at(1000), 1000, 1);
   EXPECT_GE(slowest_between(100, 1000), 999);
   EXPECT_NEAR(velocity_at(2000), 2000, 2);
-  EXPECT_NEAR(seconds(motor.steps.back().time), through_time(1000, 1000, 3000, 2000, kAccel), 0.002);
+  EXPECT_NEAR(seconds(motor.steps.back().time), through_time(1000, 1000, 3000, 2000, kAccel),
+              0.002);
 }
 
 TEST_F(ChangeOnSetPoint, SetPointsChainWhileTheBufferFreesAtEachTarget) {

@@ -35,7 +35,8 @@ TEST_F(SCurveDrive, ProfilePositionTakesTheClosedFormTime) {
   ASSERT_EQ(motor.steps.size(), 200u);
   // (The core may start the motion later for the direction output's setup time: the
   // times are measured from the first step.)
-  EXPECT_NEAR(motor.steps.back().time - motor.steps.front().time, ms(310) - 0.01884437 * kClockHz, 2);
+  EXPECT_NEAR(motor.steps.back().time - motor.steps.front().time, ms(310) - 0.01884437 * kClockHz,
+              2);
   EXPECT_EQ(drive.position_actual(), 200);
   EXPECT_TRUE(drive.statusword() & kTargetReached);
 }
