@@ -52,11 +52,13 @@ def test_a_master_remapping_a_tpdo_mid_run_is_followed(master, start_node, start
     start_bridge()
     link = boot(master, start_node)
     ax = link.axes[1]
+    # The bridge discovers the node on the default SDO channel, which CiA 301 gives one client
+    # at a time: the test's master waits until it is done.
+    wait_discovered(cyclone)
     # A quadrature encoder with 1000 lines (counted once each) on 2000 steps/rev counts half
     # the motor's steps, so motor and encoder positions differ and a mix-up shows.
     master.write_u8(NODE, 0x2009, 1, 1)
     master.write_i32(NODE, 0x5001, 2, 1000)
-    wait_discovered(cyclone)
     clear_and_profile(ax, FAST)
     set_position(ax, 0)
     # Swap TPDO2's entries by the CiA 301 procedure: encoder position first, then motor.
