@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <string>
 
+#include "node/bench/bench_clock.hpp"
 #include "node/device.hpp"
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/sim/objects.hpp"
@@ -25,18 +26,8 @@ using namespace stepnode;
 
 namespace {
 
-uint64_t now_us() {
-  timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<uint64_t>(ts.tv_sec) * 1'000'000u + static_cast<uint64_t>(ts.tv_nsec) / 1000;
-}
-
-double cpu_seconds() {
-  rusage u;
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) / 1e6;
-}
+using bench::cpu_seconds;
+using bench::now_us;
 
 void sleep_until(uint64_t at_us) {
   timespec ts{static_cast<time_t>(at_us / 1'000'000), static_cast<long>(at_us % 1'000'000 * 1000)};
