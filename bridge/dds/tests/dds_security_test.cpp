@@ -12,6 +12,10 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/lsan_interface.h>
+#endif
+
 #include <chrono>
 #include <memory>
 #include <random>
@@ -182,9 +186,18 @@ TEST(DdsSecurity, ACertificateTheGrantsDoNotNameCannotJoin) {
         << e.what();
   }
   // And Fast DDS refuses the same participant on its own (the check is not stricter than it).
-  EXPECT_EQ(efd::DomainParticipantFactory::get_instance()->create_participant(
-                options.domain, secured_qos(options.security)),
-            nullptr);
+  // Fast DDS 2.9 leaks the identity handle of a participant it refuses (allocated in
+  // PKIDH::get_identity_handle, never returned): the sanitizer build is not told of it.
+#if defined(__SANITIZE_ADDRESS__)
+  __lsan_disable();
+#endif
+  efd::DomainParticipant* refused =
+      efd::DomainParticipantFactory::get_instance()->create_participant(
+          options.domain, secured_qos(options.security));
+#if defined(__SANITIZE_ADDRESS__)
+  __lsan_enable();
+#endif
+  EXPECT_EQ(refused, nullptr);
 }
 
 TEST(DdsSecurity, TheBridgeMayNotSubscribe) {
