@@ -25,6 +25,14 @@ def wait_discovered(cyc, node: int = NODE, axis: int = 1):
              f"the first AxisStatus of node {node} axis {axis}")
 
 
+def wait_sdo_quiet(master, node: int = NODE, quiet_s: float = 0.5, timeout: float = 15.0):
+    """Until no SDO request or answer of `node`'s default channel was seen for `quiet_s`."""
+    deadline = time.monotonic() + timeout
+    ids = (0x600 + node, 0x580 + node)
+    while master.collect(quiet_s, lambda m: m.arbitration_id in ids):
+        assert time.monotonic() < deadline, f"node {node}'s SDO channel never went quiet"
+
+
 def test_every_status_transition_of_a_homing_and_a_move_arrives_in_order(master, start_node, start_bridge, cyclone):
     link = boot(master, start_node)
     ax = link.axes[1]
@@ -53,8 +61,10 @@ def test_a_master_remapping_a_tpdo_mid_run_is_followed(master, start_node, start
     link = boot(master, start_node)
     ax = link.axes[1]
     # The bridge discovers the node on the default SDO channel, which CiA 301 gives one client
-    # at a time: the test's master waits until it is done.
+    # at a time: the test's master waits until the bridge's transfers are over (its first
+    # samples come before its last reads).
     wait_discovered(cyclone)
+    wait_sdo_quiet(master)
     # A quadrature encoder with 1000 lines (counted once each) on 2000 steps/rev counts half
     # the motor's steps, so motor and encoder positions differ and a mix-up shows.
     master.write_u8(NODE, 0x2009, 1, 1)
