@@ -5,20 +5,17 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bridge/config.hpp"
+#include "bridge/dds/tests/command_line.hpp"
 
 namespace stepnode::bridge {
 namespace {
 
 BridgeConfig parse_args(std::vector<std::string> args) {
-  args.insert(args.begin(), "stepbridge");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  bool exit_now = false;
-  int exit_code = 0;
-  return parse_bridge_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
+  return test::parse_command_line(std::move(args));
 }
 
 std::string config_file(const std::string& text) {
