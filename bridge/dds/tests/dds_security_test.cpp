@@ -18,7 +18,6 @@
 
 #include <chrono>
 #include <memory>
-#include <random>
 #include <string>
 #include <thread>
 
@@ -28,6 +27,7 @@
 #include "bridge/dds/qos.hpp"
 #include "bridge/dds/security.hpp"
 #include "bridge/dds/tests/security_pki.hpp"
+#include "bridge/dds/tests/test_domain.hpp"
 #include "bridge/dds/types.hpp"
 
 namespace stepnode::bridge::dds {
@@ -35,11 +35,6 @@ namespace {
 namespace efd = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 using Clock = std::chrono::steady_clock;
-
-uint32_t random_domain() {
-  std::random_device rd;
-  return 50 + (rd() ^ static_cast<uint32_t>(getpid())) % 180;
-}
 
 void no_intraprocess_delivery() {
   eprosima::fastrtps::LibrarySettingsAttributes settings;
@@ -118,7 +113,7 @@ AxisStatusSample status(uint16_t bits) {
 
 TEST(DdsSecurity, OnlyThePermittedSupervisorReadsTheBridge) {
   no_intraprocess_delivery();
-  const uint32_t domain = random_domain();
+  const uint32_t domain = test::unique_test_domain();
   PublisherOptions options;
   options.participant.domain = domain;
   options.participant.security = test::security_of("stepbridge");
@@ -173,7 +168,7 @@ TEST(DdsSecurity, ACertificateTheGrantsDoNotNameCannotJoin) {
   // The intruder's valid certificate with the plant's real permissions (signed by the
   // right CA, but no grant names it): refused before Fast DDS sees it, in one line.
   ParticipantOptions options;
-  options.domain = random_domain();
+  options.domain = test::unique_test_domain();
   options.security = test::security_of("intruder-unsigned");
   try {
     delete_participant(create_participant(options));
@@ -202,7 +197,8 @@ TEST(DdsSecurity, ACertificateTheGrantsDoNotNameCannotJoin) {
 
 TEST(DdsSecurity, TheBridgeMayNotSubscribe) {
   // Its grant allows publishing only: a reader with its identity is refused locally.
-  StatusReader bridge_as_reader(random_domain(), secured_qos(test::security_of("stepbridge")));
+  StatusReader bridge_as_reader(test::unique_test_domain(),
+                                secured_qos(test::security_of("stepbridge")));
   ASSERT_NE(bridge_as_reader.participant(), nullptr);
   EXPECT_EQ(bridge_as_reader.reader(), nullptr);
 }

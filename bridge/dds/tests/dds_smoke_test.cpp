@@ -1,6 +1,6 @@
-// In-process DDS: the bridge's publisher and a reader in two participants on a random
-// domain (so parallel test runs do not hear each other). Late joiner, dispose, ROS 2
-// names, the keyed/unkeyed trap, XML profiles, and (when built) a Cyclone DDS subscriber.
+// In-process DDS: the bridge's publisher and a reader in two participants on a
+// domain no other test uses (so parallel test runs do not hear each other). Late joiner, dispose,
+// ROS 2 names, the keyed/unkeyed trap, XML profiles, and (when built) a Cyclone DDS subscriber.
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -14,7 +14,6 @@
 #include <chrono>
 #include <cstdio>
 #include <optional>
-#include <random>
 #include <string>
 #include <thread>
 
@@ -22,6 +21,7 @@
 #include "bridge/dds/participant.hpp"
 #include "bridge/dds/publisher.hpp"
 #include "bridge/dds/qos.hpp"
+#include "bridge/dds/tests/test_domain.hpp"
 #include "bridge/dds/types.hpp"
 
 namespace stepnode::bridge::dds {
@@ -29,11 +29,6 @@ namespace {
 namespace efd = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 using Clock = std::chrono::steady_clock;
-
-uint32_t random_domain() {
-  std::random_device rd;
-  return 50 + (rd() ^ static_cast<uint32_t>(getpid())) % 180;  // 50..229
-}
 
 // A reader on its own participant. Polls with take(), no listener.
 class TestReader {
@@ -94,7 +89,7 @@ AxisStatusSample status(uint8_t node, uint8_t axis, uint16_t bits) {
 }
 
 TEST(DdsSmoke, LateJoinerGetsTheCurrentStatusOfEveryAxisThenTheDispose) {
-  uint32_t domain = random_domain();
+  uint32_t domain = test::unique_test_domain();
   PublisherOptions options;
   options.participant.domain = domain;
   DdsPublisher publisher(options);
@@ -129,7 +124,7 @@ TEST(DdsSmoke, LateJoinerGetsTheCurrentStatusOfEveryAxisThenTheDispose) {
 }
 
 TEST(DdsSmoke, LateJoinerGetsEveryDrivesStateThenTheDispose) {
-  uint32_t domain = random_domain();
+  uint32_t domain = test::unique_test_domain();
   PublisherOptions options;
   options.participant.domain = domain;
   DdsPublisher publisher(options);
@@ -178,7 +173,7 @@ TEST(DdsSmoke, LateJoinerGetsEveryDrivesStateThenTheDispose) {
 }
 
 TEST(DdsSmoke, PositionCarriesPublishTimeAndMatchesAVolatileReader) {
-  uint32_t domain = random_domain();
+  uint32_t domain = test::unique_test_domain();
   PublisherOptions options;
   options.participant.domain = domain;
   DdsPublisher publisher(options);
@@ -204,7 +199,7 @@ TEST(DdsSmoke, PositionCarriesPublishTimeAndMatchesAVolatileReader) {
 }
 
 TEST(DdsSmoke, Ros2NamesMatchAnUnkeyedReaderAndNotAKeyedOne) {
-  uint32_t domain = random_domain();
+  uint32_t domain = test::unique_test_domain();
   Naming ros2{true, "cell4"};
   PublisherOptions options;
   options.participant.domain = domain;
@@ -237,7 +232,7 @@ TEST(DdsSmoke, Ros2NamesMatchAnUnkeyedReaderAndNotAKeyedOne) {
 
 TEST(DdsSmoke, BadRos2PrefixIsRefused) {
   PublisherOptions options;
-  options.participant.domain = random_domain();
+  options.participant.domain = test::unique_test_domain();
   options.naming = Naming{true, "bad-prefix"};
   EXPECT_THROW(DdsPublisher{options}, std::invalid_argument);
 }
@@ -291,7 +286,7 @@ TEST(DdsQos, XmlProfileReplacesTheBuiltInQos) {
   auto* factory = efd::DomainParticipantFactory::get_instance();
   ASSERT_EQ(factory->load_XML_profiles_string(xml.c_str(), xml.size()), ReturnCode_t::RETCODE_OK);
   ParticipantOptions options;
-  options.domain = random_domain();
+  options.domain = test::unique_test_domain();
   auto* participant = create_participant(options);
   auto* subscriber = participant->create_subscriber(efd::SUBSCRIBER_QOS_DEFAULT);
   bool from_profile = false;
@@ -309,7 +304,7 @@ TEST(DdsQos, XmlProfileReplacesTheBuiltInQos) {
 // Cyclone DDS, built from the IDL alone, receives the bridge's AxisStatus (as a late
 // joiner) and AxisPosition over UDP: the topics are standard DDS.
 TEST(DdsInterop, CycloneSubscriberReceivesStatusAndPosition) {
-  uint32_t domain = random_domain();
+  uint32_t domain = test::unique_test_domain();
   PublisherOptions options;
   options.participant.domain = domain;
   DdsPublisher publisher(options);

@@ -4,12 +4,12 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
-#include <random>
 #include <string>
 
 #include "bridge/dds/naming.hpp"
 #include "bridge/dds/participant.hpp"
 #include "bridge/dds/qos.hpp"
+#include "bridge/dds/tests/test_domain.hpp"
 
 namespace stepnode::bridge::dds {
 namespace {
@@ -18,7 +18,7 @@ using eprosima::fastrtps::types::ReturnCode_t;
 
 TEST(ShippedProfiles, StepbridgeXmlEqualsTheBuiltInWriterQos) {
   ParticipantOptions options;
-  options.domain = 50 + std::random_device{}() % 180;
+  options.domain = test::unique_test_domain();
   options.profiles_file = STEPNODE_SOURCE_DIR "/bridge/profiles/stepbridge.xml";
   auto* participant = create_participant(options);
   auto* publisher = participant->create_publisher(efd::PUBLISHER_QOS_DEFAULT);

@@ -1,4 +1,4 @@
-// The stepwatch executable against an in-process bridge publisher on a random domain:
+// The stepwatch executable against an in-process bridge publisher on a domain of its own:
 // --once --json gets the TRANSIENT_LOCAL state of every node and axis; bad input exits 2.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -7,12 +7,12 @@
 #include <atomic>
 #include <cstdio>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "bridge/dds/publisher.hpp"
+#include "bridge/dds/tests/test_domain.hpp"
 
 namespace stepnode::stepwatch {
 namespace {
@@ -33,12 +33,8 @@ Result run(const std::string& args) {
   return r;
 }
 
-uint32_t random_domain() {
-  return 50 + (std::random_device{}() ^ static_cast<uint32_t>(getpid())) % 180;
-}
-
 TEST(StepwatchCli, OnceJsonPrintsEveryNodeAndAxisOfALateJoin) {
-  uint32_t domain = random_domain();
+  uint32_t domain = bridge::dds::test::unique_test_domain();
   bridge::dds::PublisherOptions options;
   options.participant.domain = domain;
   bridge::dds::DdsPublisher publisher(options);
@@ -74,13 +70,14 @@ TEST(StepwatchCli, OnceJsonPrintsEveryNodeAndAxisOfALateJoin) {
 }
 
 TEST(StepwatchCli, OnceWithNoBridgeExits1) {
-  Result r = run("--once --wait-ms 300 --domain " + std::to_string(random_domain()));
+  Result r = run("--once --wait-ms 300 --domain " +
+                 std::to_string(bridge::dds::test::unique_test_domain()));
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_NE(r.out.find("no samples on DDS domain"), std::string::npos) << r.out;
 }
 
 TEST(StepwatchCli, LiveJsonStreamsSamples) {
-  uint32_t domain = random_domain();
+  uint32_t domain = bridge::dds::test::unique_test_domain();
   bridge::dds::PublisherOptions options;
   options.participant.domain = domain;
   bridge::dds::DdsPublisher publisher(options);
