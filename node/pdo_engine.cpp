@@ -188,16 +188,16 @@ bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx
   return consumed;
 }
 
-void PdoEngine::transmit(Tpdo& t, std::vector<uint8_t> data, uint64_t now_us) {
-  od::CanFrame f(t.cob_id, std::span<const uint8_t>(data));
+void PdoEngine::transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us) {
+  od::CanFrame f(pdo.cob_id, std::span<const uint8_t>(data));
   send_(f);
   ++stats_.tpdo_sent;
-  t.last_data = std::move(data);
-  t.last_sent_us = now_us;
-  t.sent_any = true;
-  t.send_request = false;
-  t.event_pending = false;
-  t.held = false;
+  pdo.last_data = std::move(data);
+  pdo.last_sent_us = now_us;
+  pdo.sent_any = true;
+  pdo.send_request = false;
+  pdo.event_pending = false;
+  pdo.held = false;
 }
 
 void PdoEngine::on_sync(uint8_t counter, uint64_t sync_us, uint64_t now_us) {
