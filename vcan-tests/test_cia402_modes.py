@@ -46,6 +46,7 @@ NODE = 43
 SIM_SWITCHES = 0x5000  # 1 home position, 2 home width (0: none), 3/4 lower limit present/position,
 #                        5/6 upper limit present/position (a limit is active at or beyond its position)
 SIM_ENCODER = 0x5001  # 1 steps per revolution, 3 marker offset, 4 marker width
+SIM_FAULTS = 0x5002  # 1/2 stall below enabled/position, 3/4 stall above: a hard stop
 SIM_POSITION = 0x5003  # mechanical position of the load
 SIM_INPUTS = 0x5004  # bit 0 home, 1 lower limit, 2 upper limit, 4 marker
 
@@ -317,6 +318,39 @@ def test_homing_on_a_home_switch_that_is_not_there_is_an_error(master, start_nod
     assert drive.read_i32(POSITION_ACTUAL) == mechanical != 999
     assert drive.read_i32(VELOCITY_ACTUAL) == 0
     assert homing_status(drive.read_u16(STATUSWORD)) == ERROR_STILL
+
+
+@pytest.mark.parametrize("method", [-17, -1])
+def test_homing_on_a_hard_stop(master, start_node, tmp_path, method):
+    """stepnode's manufacturer-specific methods (CiA 402-2 leaves 6098h -128..-1 to the
+    manufacturer; README "CiA 402 drive"): -17 moves negative until the load is blocked and
+    takes the block as the home position; -1 then goes back to the first index pulse, as
+    method 1 does from the negative limit switch. The block is the machine's hard stop
+    (5002h: the load cannot pass -2000), found with the encoder: no count in the direction
+    of travel for more than 6065h steps, for 6066h. The home position is where the load is,
+    from the layout, not from the drive."""
+    node = boot(master, start_node, tmp_path)
+    drive = node[1]
+    layout = Layout()  # the negative limit switch (-3000) lies beyond the hard stop
+    layout.apply(master)
+    block = -2000
+    master.write_u8(NODE, SIM_FAULTS, 1, 1)
+    master.write_i32(NODE, SIM_FAULTS, 2, block)
+    drive.write_u32(FOLLOWING_ERROR_WINDOW, 50)
+    master.write_u16(NODE, FOLLOWING_ERROR_TIMEOUT, 0, 20)  # 6066h UNSIGNED16, ms
+    offset = 123
+    set_homing(drive, method, offset)
+    drive.enable(MODE_HM)
+    node.pump(0.1)
+    assert homing_status(drive.sw) == NOT_STARTED, sw_text(drive.sw)
+    frames, end = run_homing(node)
+    seq = homing_sequence(frames)
+    assert seq[0] == IN_PROGRESS and seq[-1] == COMPLETED, frames
+    expect = block if method == -17 else layout.first(layout.index, block, +1, True)
+    mechanical = master.read_i32(NODE, SIM_POSITION)
+    print(f"method {method}: homed at {mechanical} (block {block}, expected {expect}); {seq}")
+    assert mechanical == expect
+    assert drive.read_i32(POSITION_ACTUAL) == offset
 
 
 # ================================================================ cyclic synchronous modes

@@ -61,6 +61,9 @@ class InputPort {
   // Encoder counts (0 without an encoder): for a quadrature encoder every edge of A and B,
   // 4 per line, as a quadrature decoder counts them at its finest.
   virtual int64_t encoder_count() const = 0;
+  // Whether there is an encoder to count (a front end that needs one, such as homing on a
+  // hard stop, refuses to run without).
+  virtual bool has_encoder() const = 0;
 
  protected:
   bool edges_waiting_ = true;  // the back end sets it when it has an edge or a change to look at

@@ -115,6 +115,9 @@ class AxisMachine : public motion::MotorPort {
   // Encoder counts as the input hardware sees them: every edge of A and B for quadrature
   // (4 per line; the module decides how many it counts), 1 per line for up/down; 0 without.
   int64_t encoder_count() const override;
+  bool has_encoder() const override {
+    return encoder_counts_per_rev() > 0 && config_.steps_per_rev > 0;
+  }
   int64_t encoder_counts_per_rev() const;
   uint64_t pulses_received() const { return pulses_; }
   // The width of the last pulse received (ns): 0 for a step given without one (a step

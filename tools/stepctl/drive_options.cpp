@@ -62,7 +62,9 @@ CLI::App* add_drive_command(CLI::App& app, DriveArgs& args) {
   add_wait(pv);
 
   auto* home = add("home", "homing: 6060h = 6, homing operation start, until homing attained");
-  home->add_option("--method", args.method, "6098h homing method (CiA 402-2: 1..35, 37)")
+  home->add_option(
+          "--method", args.method,
+          "6098h homing method (CiA 402-2: 1..35, 37; stepnode: -1, -2, -17, -18 on a hard stop)")
       ->check(CLI::Range(-128, 127));
   home->add_option("--switch-speed", args.switch_speed, "6099h:1 speed during search for switch")
       ->check(u32);

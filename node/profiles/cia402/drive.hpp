@@ -161,6 +161,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void run_search(motion::Tick now);
   void homing_step(const motion::Step& step);
   void homing_done(bool ok, motion::Tick now);
+  bool block_detected(const motion::Step& step);
   HomingInputs homing_inputs() const;
   void cyclic_position(int64_t target, motion::Tick now);
   void cyclic_velocity(int64_t velocity, motion::Tick now);
@@ -206,6 +207,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   size_t search_ = 0;
   bool search_stopping_ = false;  // a Stop search's ramp runs; the next begins at its end
   HomingInputs last_inputs_;
+  // A search for a hard stop (HomingEvent::Block): the encoder count when it last moved in
+  // the direction of travel, the steps given since, and since when they exceed 6065h.
+  int64_t block_count_ = 0;
+  uint32_t block_steps_ = 0;
+  std::optional<motion::Tick> block_since_;
 
   // CSP / IP: the running segment, from seg_from_ at seg_start_ to seg_to_ in seg_ticks_
   // (linear interpolation, one cycle behind the master's set-points); CSV: a constant

@@ -21,6 +21,16 @@ void Drive::start_homing(Tick now) {
     homing_ = Homing::Error;  // 6098h names no method this drive performs
     return;
   }
+  // A hard stop is found with the encoder and the following error window (6065h): without
+  // either the method cannot be performed here.
+  const bool needs_block = std::any_of(plan->begin(), plan->end(), [](const HomingSearch& s) {
+    return s.until == HomingEvent::Block;
+  });
+  if (needs_block &&
+      (!core_.motor().has_encoder() || parameters_.following_error_window == UINT32_MAX)) {
+    homing_ = Homing::Error;
+    return;
+  }
   searches_ = std::move(*plan);
   search_ = 0;
   search_stopping_ = false;
@@ -37,6 +47,9 @@ void Drive::run_search(Tick now) {
   const int64_t acc = std::max<uint32_t>(parameters_.homing_acceleration, 1);
   grid_ = motion::profile_levels_per_hz(acc);
   last_inputs_ = homing_inputs();
+  block_count_ = core_.motor().encoder_count();
+  block_steps_ = 0;
+  block_since_.reset();
   if (!core_.start(*this, motion::profile_ramp(v, acc, acc, grid_), s.direction, std::nullopt, now))
     homing_ = Homing::Idle;
 }
@@ -47,9 +60,13 @@ void Drive::homing_step(const motion::Step& step) {
   last_inputs_ = in;
   if (search_stopping_) return;  // ramping down after an edge: the next search looks again
   const HomingSearch& s = searches_[search_];
-  if (happened(s.until, before, in)) {
+  const bool block = s.until == HomingEvent::Block;
+  if (block ? block_detected(step) : happened(s.until, before, in)) {
     switch (s.then) {
-      case HomingSearch::Then::Stop: search_stopping_ = true; return core_.stop(step.time);
+      case HomingSearch::Then::Stop:
+        search_stopping_ = true;
+        // Against a hard stop there is nothing to ramp down: the motion ends on this step.
+        return block ? core_.halt_motion(step.time) : core_.stop(step.time);
       case HomingSearch::Then::Continue: ++search_; return;
       case HomingSearch::Then::Home:
         core_.halt(*this, step.time);
@@ -74,6 +91,24 @@ void Drive::homing_step(const motion::Step& step) {
     core_.halt(*this, step.time);
     homing_done(false, step.time);
   }
+}
+
+// The load stopped following the steps: the encoder has not counted in the direction of
+// travel for more than the following error window (6065h, in steps: it must exceed the
+// steps per encoder count), and that has lasted the following error time-out (6066h). A
+// stepper blocked by a hard stop loses these steps; its rotor stays at the block.
+bool Drive::block_detected(const motion::Step& step) {
+  const int64_t count = core_.motor().encoder_count();
+  if ((count - block_count_) * step.direction > 0) {
+    block_count_ = count;
+    block_steps_ = 0;
+    block_since_.reset();
+    return false;
+  }
+  if (++block_steps_ <= parameters_.following_error_window) return false;
+  if (!block_since_) block_since_ = step.time;
+  const Tick timeout = Tick{parameters_.following_error_timeout_ms} * motion::kClockHz / 1000;
+  return step.time - *block_since_ >= timeout;
 }
 
 void Drive::homing_done(bool ok, Tick now) {

@@ -98,6 +98,7 @@ bool happened(HomingEvent event, const HomingInputs& b, const HomingInputs& a) {
     case E::HomeOn: return a.home && !b.home;
     case E::HomeOff: return !a.home && b.home;
     case E::IndexOn: return a.index && !b.index;
+    case E::Block: return false;  // not an input: the drive detects it
   }
   return false;
 }
@@ -119,6 +120,18 @@ std::optional<std::vector<HomingSearch>> homing_plan(int8_t method, bool home_ac
     case 18:
       return std::vector<HomingSearch>{{kPos, kFast, E::PositiveLimitOn, Then::Stop},
                                        {kNeg, kSlow, E::PositiveLimitOff, Then::Home}};
+    // The manufacturer's methods on a hard stop: 1, 2, 17, 18 with the block in place of the
+    // limit switch. The drive stops at the block at once (no ramp into a wall); the home
+    // position is the block itself (-17, -18: the load cannot be anywhere else), or the
+    // first index pulse on the way back at the slow speed (-1, -2).
+    case -1:
+      return std::vector<HomingSearch>{{kNeg, kFast, E::Block, Then::Stop},
+                                       {kPos, kSlow, E::IndexOn, Then::Home}};
+    case -2:
+      return std::vector<HomingSearch>{{kPos, kFast, E::Block, Then::Stop},
+                                       {kNeg, kSlow, E::IndexOn, Then::Home}};
+    case -17: return std::vector<HomingSearch>{{kNeg, kFast, E::Block, Then::Home}};
+    case -18: return std::vector<HomingSearch>{{kPos, kFast, E::Block, Then::Home}};
     // Home switch: positive (active on the positive side) for 3, 4, 19, 20, negative for
     // 5, 6, 21, 22; the home position left (3, 6, 19, 22) or right (4, 5, 20, 21) of its edge.
     case 3: return home_switch_plan(kPos, kNeg, true, home_active);

@@ -27,6 +27,9 @@ enum class HomingEvent : uint8_t {
   HomeOn,
   HomeOff,
   IndexOn,  // the rising edge of the index pulse
+  // A hard stop (a block): the load no longer follows the steps. Not an input: the drive
+  // detects it with the encoder (drive_homing.cpp), so happened() never reports it.
+  Block,
 };
 
 // Whether `event` happened between two samples of the inputs (after a step).
@@ -55,7 +58,10 @@ struct HomingSearch {
 // drive performs 1, 2 (limit switch and index pulse), 3..6 (home switch and index pulse),
 // 7..14 (a home switch between the limit switches, reversing at them, and the index pulse),
 // 17, 18 (limit switch), 19..22 (home switch), 23..30 (as 7..14 without the index pulse),
-// 33, 34 (index pulse), 35 and 37.
+// 33, 34 (index pulse), 35 and 37; and stepnode's manufacturer-specific methods on a hard
+// stop (CiA 402 leaves -128..-1 to the manufacturer), numbered as the limit-switch methods
+// whose switch the hard stop replaces: -17 / -18 the hard stop in the negative / positive
+// direction, -1 / -2 the same and then the first index pulse away from it.
 std::optional<std::vector<HomingSearch>> homing_plan(int8_t method, bool home_active);
 
 }  // namespace stepnode::cia402

@@ -167,9 +167,10 @@ void add_profile_objects(AxisTable t) {
   jerk.add(jerk_sub::kEndAcceleration, "End acceleration jerk", DT::Unsigned32, RW, u32(10'000));
   jerk.add(jerk_sub::kEndDeceleration, "End deceleration jerk", DT::Unsigned32, RW, u32(10'000));
   // 6098h: 0 (no homing method assigned) by default; the methods the standard defines: 1..35
-  // and 37, without the reserved 15, 16, 31, 32 and 36 (the homing mode will refuse at its
-  // start a method the axis cannot run).
-  std::vector<int8_t> methods{0, 37};
+  // and 37, without the reserved 15, 16, 31, 32 and 36, and the manufacturer's -1, -2, -17,
+  // -18 on a hard stop (homing.hpp; the homing mode will refuse at its start a method the
+  // axis cannot run).
+  std::vector<int8_t> methods{-18, -17, -2, -1, 0, 37};
   for (int8_t m = 1; m <= 35; ++m)
     if (m != 15 && m != 16 && m != 31 && m != 32) methods.push_back(m);
   one_of<int8_t>(t.var(kHomingMethod, "Homing method", DT::Integer8, RW, i8(0)),

@@ -179,5 +179,112 @@ TEST_F(Homing, HaltInterruptsTheHoming) {
   EXPECT_EQ(homing_bits(), kNotStarted);  // 0/0/1: interrupted, standing
 }
 
+// ---- stepnode's manufacturer-specific methods on a hard stop (homing.hpp) --------------
+// The machine's hard stop: the motor cannot pass the position (sim stall_below/above), its
+// encoder (quadrature, 500 lines on 2000 steps per revolution: one count per step) stops
+// counting there. The block is found once the encoder has not counted in the direction of
+// travel for more than 6065h steps and that has lasted 6066h.
+class HardStopHoming : public Homing {
+ protected:
+  static constexpr uint32_t kWindow = 20;     // 6065h, steps
+  static constexpr uint16_t kTimeoutMs = 10;  // 6066h
+  void SetUp() override {
+    drive.parameters().following_error_window = kWindow;
+    drive.parameters().following_error_timeout_ms = kTimeoutMs;
+  }
+  // Steps the motor was given in `direction` that did not move it.
+  int64_t lost_steps(int direction) const {
+    int64_t given = 0;
+    for (const auto& s : motor.steps) given += s.direction == direction ? 1 : -1;
+    return given - direction * motor.position();
+  }
+};
+
+TEST_F(HardStopHoming, MethodMinus17HomesOnTheHardStopBelow) {
+  motor.config().stall_below = -500;
+  drive.parameters().home_offset = 7;
+  home(-17);
+  EXPECT_EQ(homing_bits(), kCompleted);
+  EXPECT_EQ(motor.position(), -500);
+  EXPECT_EQ(drive.position_actual(), 7);  // the home offset, at the block
+  // At 2000 steps/s (6099h:1) a step every 0.5 ms: the 21st step without a count exceeds
+  // the window, and 10 ms later (20 steps) the block is found on that step.
+  EXPECT_EQ(lost_steps(-1), kWindow + 1 + 20);
+  // Position actual now measures from the block: a move to 107 ends 100 steps above it.
+  drive.set_mode(Mode::ProfilePosition, now);
+  drive.parameters().profile_velocity = 2000;
+  drive.parameters().acceleration = 20'000;
+  drive.parameters().deceleration = 20'000;
+  drive.set_target_position(107);
+  cw(0x0F);
+  cw(0x1F);
+  run_s(1);
+  EXPECT_EQ(motor.position(), -400);
+  EXPECT_EQ(drive.position_actual(), 107);
+}
+
+TEST_F(HardStopHoming, MethodMinus18HomesOnTheHardStopAbove) {
+  motor.config().stall_above = 700;
+  home(-18);
+  EXPECT_EQ(homing_bits(), kCompleted);
+  EXPECT_EQ(motor.position(), 700);
+  EXPECT_EQ(drive.position_actual(), 0);
+  EXPECT_EQ(lost_steps(+1), kWindow + 1 + 20);
+}
+
+TEST_F(HardStopHoming, MethodsMinus1AndMinus2GoBackToTheFirstIndexPulse) {
+  motor.config().stall_below = -500;
+  home(-1);
+  EXPECT_EQ(homing_bits(), kCompleted);
+  EXPECT_EQ(motor.position(), 0);  // as method 1: the first pulse moving up, at 0
+  reset();
+  motor.config().stall_above = 2500;
+  home(-2);
+  EXPECT_EQ(homing_bits(), kCompleted);
+  EXPECT_EQ(motor.position(), 2003);  // as method 2: moving down, the pulse at 2000..2003
+}
+
+TEST_F(HardStopHoming, ALimitSwitchBeforeTheHardStopIsAHomingError) {
+  motor.config().stall_below = -500;
+  limits(-300, std::nullopt);
+  home(-17);
+  EXPECT_EQ(homing_bits() & kError, kError);
+  EXPECT_EQ(motor.position(), -300);
+}
+
+TEST_F(HardStopHoming, WithoutAnEncoderOrAFollowingErrorWindowTheMethodIsRefused) {
+  auto start = [&] {
+    drive.parameters().homing_method = -17;
+    drive.set_mode(Mode::Homing, now);
+    cw(0x06);
+    cw(0x07);
+    cw(0x0F);
+    cw(0x1F);
+    run_s(0.5);
+  };
+  motor.config().stall_below = -500;
+  motor.config().encoder = sim::EncoderKind::None;
+  start();
+  EXPECT_EQ(homing_bits(), kError | kNotStarted);  // error, velocity 0: at the start edge
+  EXPECT_EQ(motor.position(), 0);                  // nothing moved
+  reset();
+  cw(0x0F);  // bit 4 low again
+  motor.config().stall_below = -500;
+  drive.parameters().following_error_window = UINT32_MAX;  // 6065h off
+  start();
+  EXPECT_EQ(homing_bits(), kError | kNotStarted);
+  EXPECT_EQ(motor.position(), 0);
+}
+
+TEST_F(HardStopHoming, AnEncoderCountingEveryFourStepsNeedsAWindowAboveFour) {
+  // Up/down counting of 500 lines on 2000 steps: one count per 4 steps. A free load counts
+  // within every window of 4 steps, so a window of 20 never sees a block before the stop.
+  motor.config().encoder = sim::EncoderKind::UpDown;
+  motor.config().stall_below = -1000;
+  home(-17);
+  EXPECT_EQ(homing_bits(), kCompleted);
+  EXPECT_EQ(motor.position(), -1000);
+}
+
 }  // namespace
 }  // namespace stepnode::cia402

@@ -192,9 +192,10 @@ TEST_F(Cia402Objects, OptionCodesTakeTheStandardsValuesOnly) {
   EXPECT_EQ(write<int16_t>(0x6086, 0, 2), SdoAbort::InvalidValue);  // jerk-free ramp: not offered
   EXPECT_EQ(write<int16_t>(0x6086, 0, -1), SdoAbort::InvalidValue);
   EXPECT_EQ(write<int16_t>(0x60C0, 0, 1), SdoAbort::InvalidValue);
-  for (int8_t method : {0, 1, 14, 17, 30, 33, 35, 37})
+  // The standard's methods, and the manufacturer's on a hard stop (homing.hpp).
+  for (int8_t method : {0, 1, 14, 17, 30, 33, 35, 37, -1, -2, -17, -18})
     EXPECT_EQ(write<int8_t>(0x6098, 0, method), SdoAbort::None) << int{method};
-  for (int8_t method : {15, 16, 31, 32, 36, 38, -1})
+  for (int8_t method : {15, 16, 31, 32, 36, 38, -3, -16, -19, -128})
     EXPECT_EQ(write<int8_t>(0x6098, 0, method), SdoAbort::InvalidValue) << int{method};
   EXPECT_EQ(write<int8_t>(0x60C2, 2, 64), SdoAbort::ValueTooHigh);  // time index -128..63
   EXPECT_EQ(write<uint32_t>(0x6091, 2, 0), SdoAbort::ValueTooLow);  // a ratio term divides
