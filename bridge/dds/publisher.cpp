@@ -18,6 +18,16 @@ namespace stepnode::bridge::dds {
 namespace efd = eprosima::fastdds::dds;
 using eprosima::fastrtps::types::ReturnCode_t;
 
+namespace {
+
+// An axis instance in the sets of written instances: node << 8 | axis, so a node's
+// instances are one range of the set.
+uint16_t instance_key(uint8_t node, uint8_t axis) {
+  return static_cast<uint16_t>(node << 8 | axis);
+}
+
+}  // namespace
+
 uint64_t realtime_ns() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -79,7 +89,7 @@ bool DdsPublisher::write(TopicKind kind, void* data) {
 void DdsPublisher::axis_status(const AxisStatusSample& sample) {
   ::stepnode::AxisStatus data = to_idl(sample);
   if (write(TopicKind::AxisStatus, &data))
-    status_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+    status_instances_.insert(instance_key(sample.node, sample.axis));
 }
 
 void DdsPublisher::axis_position(const AxisPositionSample& sample) {
@@ -87,7 +97,7 @@ void DdsPublisher::axis_position(const AxisPositionSample& sample) {
   stamped.publish_time_ns = realtime_ns();
   ::stepnode::AxisPosition data = to_idl(stamped);
   if (write(TopicKind::AxisPosition, &data))
-    position_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+    position_instances_.insert(instance_key(sample.node, sample.axis));
 }
 
 void DdsPublisher::node_health(const NodeHealthSample& sample) {
@@ -105,40 +115,27 @@ void DdsPublisher::drive_status(const DriveStatusSample& sample) {
   stamped.publish_time_ns = realtime_ns();
   ::stepnode::DriveStatus data = to_idl(stamped);
   if (write(TopicKind::DriveStatus, &data))
-    drive_instances_.insert(static_cast<uint16_t>(sample.node << 8 | sample.axis));
+    drive_instances_.insert(instance_key(sample.node, sample.axis));
 }
 
 void DdsPublisher::dispose_axes(uint8_t node, uint8_t axes) {
   if (naming_.ros2) return;  // unkeyed: no instances to dispose
-  auto dispose = [&](TopicKind kind, std::set<uint16_t>& instances, auto make) {
-    for (auto it = instances.lower_bound(static_cast<uint16_t>(node << 8));
+  // `key` is a sample of the topic's type; only its key fields (node, axis) are set.
+  auto dispose = [&](TopicKind kind, std::set<uint16_t>& instances, auto key) {
+    key.node(node);
+    for (auto it = instances.lower_bound(instance_key(node, 0));
          it != instances.end() && (*it >> 8) == node;) {
-      auto data = make(static_cast<uint8_t>(*it & 0xFF));
-      ReturnCode_t rc = writer(kind)->dispose(&data, efd::HANDLE_NIL);
+      key.axis(static_cast<uint8_t>(*it & 0xFF));
+      ReturnCode_t rc = writer(kind)->dispose(&key, efd::HANDLE_NIL);
       if (rc != ReturnCode_t::RETCODE_OK)
         spdlog::warn("DDS dispose of node {} axis {} on {} failed (code {})", node, *it & 0xFF,
                      topic_name(kind, naming_), rc());
       it = instances.erase(it);
     }
   };
-  dispose(TopicKind::AxisStatus, status_instances_, [&](uint8_t axis) {
-    ::stepnode::AxisStatus d;
-    d.node(node);
-    d.axis(axis);
-    return d;
-  });
-  dispose(TopicKind::AxisPosition, position_instances_, [&](uint8_t axis) {
-    ::stepnode::AxisPosition d;
-    d.node(node);
-    d.axis(axis);
-    return d;
-  });
-  dispose(TopicKind::DriveStatus, drive_instances_, [&](uint8_t axis) {
-    ::stepnode::DriveStatus d;
-    d.node(node);
-    d.axis(axis);
-    return d;
-  });
+  dispose(TopicKind::AxisStatus, status_instances_, ::stepnode::AxisStatus{});
+  dispose(TopicKind::AxisPosition, position_instances_, ::stepnode::AxisPosition{});
+  dispose(TopicKind::DriveStatus, drive_instances_, ::stepnode::DriveStatus{});
   spdlog::debug("DDS: node {} ({} axes) disposed", node, axes);
 }
 

@@ -62,7 +62,7 @@ bool sdo_allowed(NodeState s) {
 }  // namespace
 
 struct BusObserver::Impl {
-  Impl(SampleSink& s, ObserverConfig c)
+  Impl(SampleSink& s, const ObserverConfig& c)
       : sink(s), config(c), tpdo(s), pacer(c.sdo_max_outstanding, c.sdo_rate_per_s) {
     // No clock and no global RNG in here; ASLR makes the address differ between two
     // bridge processes, which is all the jitter needs.
@@ -132,7 +132,7 @@ struct BusObserver::Impl {
   NodeHealthSample health_now(const Node& n, uint64_t now) const;
 };
 
-BusObserver::BusObserver(SampleSink& sink, ObserverConfig config)
+BusObserver::BusObserver(SampleSink& sink, const ObserverConfig& config)
     : impl_(std::make_unique<Impl>(sink, config)) {}
 BusObserver::~BusObserver() = default;
 

@@ -65,13 +65,13 @@ struct ObservedFrame {
 // left 0: the publisher stamps it when it writes (the observer has no clock).
 class BusObserver {
  public:
-  BusObserver(SampleSink& sink, ObserverConfig config = {});
+  BusObserver(SampleSink& sink, const ObserverConfig& config = {});
   ~BusObserver();
   BusObserver(const BusObserver&) = delete;
   BusObserver& operator=(const BusObserver&) = delete;
 
   // A frame from the bus; SDO requests the observer sends go to `out`.
-  void on_frame(const ObservedFrame& frame, uint64_t now_us, std::vector<od::CanFrame>& out);
+  void on_frame(const ObservedFrame& received, uint64_t now_us, std::vector<od::CanFrame>& out);
   // Timers: SDO timeouts, retries, heartbeat loss, periodic NodeHealth.
   void on_tick(uint64_t now_us, uint64_t realtime_ns, std::vector<od::CanFrame>& out);
   // Shutdown: dispose every known node's axes.

@@ -44,7 +44,8 @@ const char* hp_error_text(uint8_t number) {
   }
 }
 
-std::string emcy_text(uint16_t code, uint8_t reg, const std::array<uint8_t, 5>& m, bool stepnode) {
+std::string emcy_text(uint16_t code, uint8_t error_register,
+                      const std::array<uint8_t, 5>& manufacturer, bool stepnode) {
   std::string text;
   if (stepnode && code >= kHpErrorFirst && code <= kHpErrorLast) {
     const auto number = static_cast<uint8_t>(code - 0xFF00);
@@ -53,15 +54,15 @@ std::string emcy_text(uint16_t code, uint8_t reg, const std::array<uint8_t, 5>& 
     text = std::string("HP interrupt: ") + kHpInterruptNames[code - kHpInterruptFirst];
   } else if (stepnode && code >= kAxisErrorFirst && code <= kAxisErrorLast) {
     text = "axis " + std::to_string(code - 0xFF00) + " error";
-    const std::string latched = axis_error_bits_text(m[0]);
+    const std::string latched = axis_error_bits_text(manufacturer[0]);
     if (!latched.empty()) text += ": " + latched;
     // The status word says which errors are latched in all (earlier ones too).
-    const uint8_t others = static_cast<uint8_t>(m[1] & ~m[0]);
+    const uint8_t others = static_cast<uint8_t>(manufacturer[1] & ~manufacturer[0]);
     if (others) text += " (also latched: " + axis_error_bits_text(others) + ")";
   } else {
     text = od::emcy_code_text(code);
   }
-  text += "; error register: " + od::error_register_text(reg);
+  text += "; error register: " + od::error_register_text(error_register);
   return text;
 }
 

@@ -201,13 +201,13 @@ TpdoDecoder::Result TpdoDecoder::decode(Slot slot, const ObservedFrame& of) {
   return Result::Decoded;
 }
 
-uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t v,
+uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t raw,
                                unsigned bits) {
   DriveAxisState& d = n.drives[axis];
-  const auto i32 = [&] { return static_cast<int32_t>(sign_extend(v, bits)); };
+  const auto i32 = [&] { return static_cast<int32_t>(sign_extend(raw, bits)); };
   switch (field) {
     case AxisField::DriveStatusword: {
-      const auto s = static_cast<uint16_t>(v);
+      const auto s = static_cast<uint16_t>(raw);
       // A fault came or was reset: 603Fh changed with it (unless a TPDO brings it anyway).
       const uint16_t fault_edge = (d.statusword_known ? d.statusword ^ s : s) & kStatuswordFault;
       if (fault_edge && !(n.error_code_mapped & (1u << axis)))
@@ -217,12 +217,14 @@ uint8_t TpdoDecoder::set_drive(NodeTpdos& n, unsigned axis, AxisField field, uin
       return kDriveStatusword;
     }
     case AxisField::DriveModeDisplay:
-      d.mode_display = static_cast<int8_t>(sign_extend(v, bits));
+      d.mode_display = static_cast<int8_t>(sign_extend(raw, bits));
       return kDriveMode;
     case AxisField::DrivePosition: d.position_actual = i32(); return kDrivePosition;
     case AxisField::DriveVelocity: d.velocity_actual = i32(); return kDriveVelocity;
     case AxisField::DriveFollowingError: d.following_error = i32(); return kDriveFollowingError;
-    case AxisField::DriveErrorCode: d.error_code = static_cast<uint16_t>(v); return kDriveErrorCode;
+    case AxisField::DriveErrorCode:
+      d.error_code = static_cast<uint16_t>(raw);
+      return kDriveErrorCode;
     default: return 0;
   }
 }

@@ -150,12 +150,13 @@ class TpdoDecoder {
     uint16_t tpdo = 0;  // index into NodeTpdos::tpdos
   };
 
-  Result decode(Slot slot, const ObservedFrame& frame);
+  Result decode(Slot slot, const ObservedFrame& of);
   void publish_status(uint8_t node, unsigned axis, uint64_t can_time_ns);
   void publish_position(uint8_t node, unsigned axis, uint64_t can_time_ns);
   void publish_drive(uint8_t node, unsigned axis, uint64_t can_time_ns);
   // Sets a drive value (raw: the field's bits, not sign-extended yet); returns the DriveBit.
-  uint8_t set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t raw, unsigned bits);
+  static uint8_t set_drive(NodeTpdos& n, unsigned axis, AxisField field, uint64_t raw,
+                           unsigned bits);
   void clear_slots(uint8_t node);
 
   SampleSink& sink_;
