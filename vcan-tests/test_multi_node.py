@@ -1,0 +1,155 @@
+"""Many nodes in one process (issue 13): one stepnode with `--node-id 1-127` on vcan0
+behaves on the bus as 127 separate nodes would. Frames from CiA 301: boot-up and heartbeat
+on 0x700+id (one byte: 0x00 boot-up, 0x04 stopped, 0x05 operational, 0x7F pre-operational),
+NMT on 0x000 (command specifier, node-ID; 0 = all nodes), expedited SDO on 0x600+id and
+0x580+id.
+
+Heartbeat tolerance: a master watching a node with 0x1016 is given a consumer time above
+the producer time; masters commonly set 1.5x the period, so with 0x1017 = 100 ms every gap
+between two heartbeats of a node must stay below 150 ms (measured on the kernel receive
+timestamps of this test's socket, so the test's own scheduling does not count). The gaps
+are printed (`-s`)."""
+
+from __future__ import annotations
+
+import socket
+import struct
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import pytest
+
+from bridge_helpers import DDS_TIMEOUT, domain, node_line, start_bridge, stepbridge_bin, stepwatch_bin, watch_once
+from canopen_master import STATE_OPERATIONAL, STATE_PREOPERATIONAL, STATE_STOPPED
+from conftest import open_bus
+
+_ = (domain, start_bridge, stepbridge_bin, stepwatch_bin)  # fixtures
+
+PERIOD_S = 0.100
+TOLERANCE_S = 1.5 * PERIOD_S  # the consumer time a master gives 0x1016
+ALL = range(1, 128)
+SO_RCVBUFFORCE = 33  # <asm-generic/socket.h>; the tests run as root
+# 127 nodes inside User-Mode Linux start slower than one; allow for it.
+BOOT_TIMEOUT_S = 60.0
+DISCOVERY_TIMEOUT_S = 180.0
+
+
+@pytest.fixture
+def node_config(tmp_path) -> Path:
+    p = tmp_path / "nodes.toml"
+    p.write_text('[defaults]\n"1017" = 100\n')  # producer heartbeat time, ms
+    return p
+
+
+@pytest.fixture
+def recorder():
+    """A socket of its own with a large receive queue: 127 heartbeats arrive in a burst."""
+    bus = open_bus()
+    try:
+        bus.socket.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, 8 << 20)
+    except OSError:
+        bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
+    yield bus
+    bus.shutdown()
+
+
+def heartbeat_times(bus, duration: float) -> Dict[int, List[tuple]]:
+    """(kernel timestamp, state) of every heartbeat per node during `duration` s."""
+    out: Dict[int, List[tuple]] = {}
+    end = time.monotonic() + duration
+    while time.monotonic() < end:
+        m = bus.recv(timeout=0.05)
+        if m is None or m.is_remote_frame or m.is_extended_id or len(m.data) != 1:
+            continue
+        if 0x701 <= m.arbitration_id <= 0x77F:
+            out.setdefault(m.arbitration_id - 0x700, []).append((m.timestamp, m.data[0]))
+    return out
+
+
+def wait_bootups(bus, ids, proc, timeout: float) -> Dict[int, float]:
+    """Node-ID -> when its boot-up (0x700+id, 0x00) was received."""
+    seen: Dict[int, float] = {}
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and len(seen) < len(ids) and proc.alive:
+        m = bus.recv(timeout=0.1)
+        if m is not None and 0x701 <= m.arbitration_id <= 0x77F and bytes(m.data) == b"\x00":
+            node = m.arbitration_id - 0x700
+            assert node not in seen, f"node {node} booted twice"
+            seen[node] = m.timestamp
+    return seen
+
+
+def start_set(start_node, ids: str, config: Path):
+    # start_node puts the text after --node-id; it waits for one id's boot-up only.
+    return start_node(ids, ["--config", config, "--log-level", "info"], wait_bootup=False)
+
+
+def test_127_nodes_in_one_process_keep_their_heartbeats_and_the_bridge_discovers_them(
+        start_node, start_bridge, stepwatch_bin, domain, node_config, recorder, master):
+    bridge = start_bridge()
+    started = time.monotonic()
+    proc = start_set(start_node, "1-127", node_config)
+    booted = wait_bootups(recorder, list(ALL), proc, BOOT_TIMEOUT_S)
+    assert sorted(booted) == list(ALL), f"no boot-up from {sorted(set(ALL) - set(booted))}\n{proc.log()[-3000:]}"
+    print(f"\n127 boot-ups {time.monotonic() - started:.2f} s after start")
+
+    beats = heartbeat_times(recorder, 5.0)
+    assert sorted(beats) == list(ALL), f"no heartbeat from {sorted(set(ALL) - set(beats))}"
+    gaps = sorted(b[0] - a[0] for n in ALL for a, b in zip(beats[n], beats[n][1:]))
+    print(f"heartbeat gaps of 127 nodes: {len(gaps)}, median {gaps[len(gaps) // 2] * 1e3:.1f} ms, "
+          f"max {gaps[-1] * 1e3:.1f} ms (tolerance {TOLERANCE_S * 1e3:.0f} ms)")
+    for n in ALL:
+        assert all(s == STATE_PREOPERATIONAL for _, s in beats[n]), f"node {n}: {beats[n]}"
+        worst = max(b[0] - a[0] for a, b in zip(beats[n], beats[n][1:]))
+        assert worst < TOLERANCE_S, f"node {n}: a heartbeat gap of {worst * 1e3:.1f} ms"
+        assert len(beats[n]) >= 5.0 / TOLERANCE_S, f"node {n}: {len(beats[n])} heartbeats in 5 s"
+
+    master.send(0x000, bytes([0x01, 0]))  # NMT start remote node, all nodes
+    time.sleep(0.3)  # heartbeats already queued were sent before the command
+    after = heartbeat_times(recorder, 1.0)
+    for n in ALL:
+        assert after.get(n) and all(s == STATE_OPERATIONAL for _, s in after[n]), f"node {n}: {after.get(n)}"
+
+    # The bridge discovers every node (stepwatch: one "node" line per node it knows).
+    deadline = time.monotonic() + DISCOVERY_TIMEOUT_S
+    missing = list(ALL)
+    while missing and time.monotonic() < deadline and bridge.alive:
+        _, lines, _ = watch_once(stepwatch_bin, domain, wait_ms=3000)
+        missing = [n for n in ALL if node_line(lines, n) is None]
+        if missing:
+            time.sleep(1.0)
+    print(f"bridge: {127 - len(missing)} nodes discovered {time.monotonic() - started:.1f} s after start")
+    assert not missing, f"the bridge did not discover nodes {missing}\n{bridge.log()[-3000:]}"
+    assert proc.alive
+
+
+def sdo(master, node: int, data: bytes) -> bytes:
+    answer = master.sdo_request(node, data)
+    assert answer is not None, f"node {node} did not answer {data.hex()}"
+    return answer
+
+
+def test_nodes_of_one_process_are_independent(start_node, node_config, master):
+    proc = start_set(start_node, "3-5", node_config)
+    assert master.wait_for(lambda m: m.arbitration_id == 0x705 and bytes(m.data) == b"\x00", 10.0), proc.log()
+    # Expedited download of 0x1017 (UNSIGNED16) = 400 ms to node 3 (ccs 1, n = 2: 0x2B).
+    assert sdo(master, 3, struct.pack("<BHBH2x", 0x2B, 0x1017, 0, 400)) == struct.pack("<BHB4x", 0x60, 0x1017, 0)
+    # Upload of 0x1017 from node 4: its own value, 100 (scs 2, e = s = 1, n = 2: 0x4B).
+    assert sdo(master, 4, struct.pack("<BHB4x", 0x40, 0x1017, 0)) == struct.pack("<BHBH2x", 0x4B, 0x1017, 0, 100)
+    assert sdo(master, 3, struct.pack("<BHB4x", 0x40, 0x1017, 0)) == struct.pack("<BHBH2x", 0x4B, 0x1017, 0, 400)
+
+    master.send(0x000, bytes([0x02, 5]))  # NMT stop remote node 5
+    time.sleep(0.5)
+    master.flush()
+    beats: Dict[int, List[int]] = {}
+    for m in master.collect(1.0, lambda m: 0x703 <= m.arbitration_id <= 0x705 and len(m.data) == 1):
+        beats.setdefault(m.arbitration_id - 0x700, []).append(m.data[0])
+    assert beats.get(5) and set(beats[5]) == {STATE_STOPPED}, beats
+    assert beats.get(4) and set(beats[4]) == {STATE_PREOPERATIONAL}, beats
+    assert beats.get(3) and set(beats[3]) == {STATE_PREOPERATIONAL}, beats
+    assert 2 <= len(beats[3]) <= 3 and len(beats[4]) >= 9, beats  # 400 ms and 100 ms in 1 s
+    # A stopped node answers no SDO; the others still do.
+    assert master.sdo_request(5, struct.pack("<BHB4x", 0x40, 0x1017, 0), timeout=0.5) is None
+    assert sdo(master, 4, struct.pack("<BHB4x", 0x40, 0x1000, 0))[0] == 0x43
+    assert proc.alive
