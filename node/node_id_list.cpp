@@ -32,8 +32,7 @@ std::vector<uint8_t> parse_node_id_list(std::string_view text) {
       throw std::invalid_argument("'" + std::string(item) + "' is not a node-ID or a range");
     const uint8_t first = parse_id(item.substr(0, dash));
     const uint8_t last = dash == std::string_view::npos ? first : parse_id(item.substr(dash + 1));
-    if (last < first)
-      throw std::invalid_argument("range " + std::string(item) + " runs backwards");
+    if (last < first) throw std::invalid_argument("range " + std::string(item) + " runs backwards");
     for (unsigned id = first; id <= last; ++id) ids.push_back(static_cast<uint8_t>(id));
     start = comma + 1;
   }

@@ -23,7 +23,6 @@ NodeOptions options_of_node(const NodeOptions& base, uint8_t node_id, unsigned i
 
 // The options of every node: `ids` empty means the one node `base` describes (whose
 // node-ID may be none, for LSS); else one per id, as options_of_node.
-std::vector<NodeOptions> options_per_node(const NodeOptions& base,
-                                          const std::vector<uint8_t>& ids);
+std::vector<NodeOptions> options_per_node(const NodeOptions& base, const std::vector<uint8_t>& ids);
 
 }  // namespace stepnode::node

@@ -96,8 +96,9 @@ class NodeProcess {
   explicit NodeProcess(const NodeConfig& cfg)
       : cfg_(cfg),
         can_(cfg.iface),
-        set_(options_per_node(with_wall_clock(cfg.options), cfg.node_ids), cfg.object_defaults,
-             [this](const od::CanFrame& f) { can_.send(f); }, cfg.tick_us) {
+        set_(
+            options_per_node(with_wall_clock(cfg.options), cfg.node_ids), cfg.object_defaults,
+            [this](const od::CanFrame& f) { can_.send(f); }, cfg.tick_us) {
     filter_socket();
     if (set_.size() > 1) {
       const size_t granted = can_.request_receive_buffer(set_.size() * kReceiveBufferPerNode);
@@ -149,8 +150,7 @@ void NodeProcess::tell_ready_once_sent() {
   if (ready_sent_ || can_.has_pending()) return;
   ready_sent_ = true;
   Device& first = set_.device(0);
-  if (set_.size() > 1)
-    notifier_.status(std::to_string(set_.size()) + " nodes on " + cfg_.iface);
+  if (set_.size() > 1) notifier_.status(std::to_string(set_.size()) + " nodes on " + cfg_.iface);
   else
     notifier_.status(first.canopen().configured()
                          ? "node " + std::to_string(first.canopen().node_id()) + " on " + cfg_.iface

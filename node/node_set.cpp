@@ -11,8 +11,8 @@ NodeSet::NodeSet(const std::vector<NodeOptions>& options, const Device::ObjectDe
   filters_.resize(options.size());
   deadlines_.assign(options.size(), 0);  // due at once: start() sets them
   for (size_t i = 0; i < options.size(); ++i) {
-    devices_.push_back(std::make_unique<Device>(
-        options[i], defaults, [this, i](const od::CanFrame& f) { sent(i, f); }));
+    devices_.push_back(std::make_unique<Device>(options[i], defaults,
+                                                [this, i](const od::CanFrame& f) { sent(i, f); }));
     devices_[i]->set_receive_filter_sink(
         [this, i](const std::vector<ReceiveFilter>& f) { filters_changed(i, f); });
   }

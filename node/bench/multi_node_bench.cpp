@@ -45,8 +45,9 @@ Args parse(int argc, char** argv) {
     else if (k == "--virtual") a.virtual_time = true;
     else if (k == "--operational") a.operational = true;
     else {
-      std::fprintf(stderr, "usage: multi_node_bench [--nodes 1..127] [--seconds S] [--virtual] "
-                           "[--operational]\n");
+      std::fprintf(stderr,
+                   "usage: multi_node_bench [--nodes 1..127] [--seconds S] [--virtual] "
+                   "[--operational]\n");
       std::exit(2);
     }
   }
@@ -61,7 +62,8 @@ struct HeartbeatLog {
 
   void record(const od::CanFrame& f, uint64_t now) {
     ++frames;
-    if (f.id > 0x700 && f.id <= 0x77F && f.dlc == 1 && f.data[0] != 0) at[f.id - 0x700].push_back(now);
+    if (f.id > 0x700 && f.id <= 0x77F && f.dlc == 1 && f.data[0] != 0)
+      at[f.id - 0x700].push_back(now);
   }
   void print() const {
     std::vector<double> errors_ms;
@@ -72,10 +74,11 @@ struct HeartbeatLog {
       }
     if (errors_ms.empty()) return;
     std::sort(errors_ms.begin(), errors_ms.end());
-    std::printf("  heartbeat periods: %zu, error |period - 100 ms| median %.3f ms, p99 %.3f ms, "
-                "max %.3f ms\n",
-                errors_ms.size(), errors_ms[errors_ms.size() / 2],
-                errors_ms[errors_ms.size() * 99 / 100], errors_ms.back());
+    std::printf(
+        "  heartbeat periods: %zu, error |period - 100 ms| median %.3f ms, p99 %.3f ms, "
+        "max %.3f ms\n",
+        errors_ms.size(), errors_ms[errors_ms.size() / 2], errors_ms[errors_ms.size() * 99 / 100],
+        errors_ms.back());
   }
 };
 
@@ -128,9 +131,10 @@ void run_real(const Args& a, const std::filesystem::path& dir) {
   loop.run();
   const double wall = static_cast<double>(canio::EventLoop::now_us() - begin) / 1e6;
   const double cpu = bench::cpu_seconds() - cpu0;
-  std::printf("multi_node_bench: %u nodes in one process, heartbeat 100 ms, %s, %.1f s real "
-              "clock\n",
-              a.nodes, a.operational ? "operational" : "pre-operational", wall);
+  std::printf(
+      "multi_node_bench: %u nodes in one process, heartbeat 100 ms, %s, %.1f s real "
+      "clock\n",
+      a.nodes, a.operational ? "operational" : "pre-operational", wall);
   log.print();
   std::printf("  CPU share %.3f %% (user+system / wall), max RSS %.1f MiB\n", 100 * cpu / wall,
               rss_mib());
@@ -157,7 +161,8 @@ void run_virtual(const Args& a, const std::filesystem::path& dir) {
               a.operational ? "operational" : "pre-operational", a.seconds);
   log.print();
   std::printf("  wake-ups %.1f /s of bus time, frames sent %.1f /s\n",
-              static_cast<double>(wakeups) / a.seconds, static_cast<double>(log.frames) / a.seconds);
+              static_cast<double>(wakeups) / a.seconds,
+              static_cast<double>(log.frames) / a.seconds);
 }
 
 }  // namespace

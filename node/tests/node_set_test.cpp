@@ -42,22 +42,22 @@ class NodeSetTest : public ::testing::Test {
   }
   void frame(const od::CanFrame& f) { set->on_frame(f, t); }
   void sdo_write_u16(uint8_t node, uint16_t index, uint8_t sub, uint16_t value) {
-    frame(od::CanFrame(0x600 + node, {0x2B, static_cast<uint8_t>(index),
-                                      static_cast<uint8_t>(index >> 8), sub,
-                                      static_cast<uint8_t>(value), static_cast<uint8_t>(value >> 8),
-                                      0, 0}));
+    frame(od::CanFrame(0x600 + node,
+                       {0x2B, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8), sub,
+                        static_cast<uint8_t>(value), static_cast<uint8_t>(value >> 8), 0, 0}));
   }
   void sdo_write_u32(uint8_t node, uint16_t index, uint8_t sub, uint32_t v) {
-    frame(od::CanFrame(0x600 + node, {0x23, static_cast<uint8_t>(index),
-                                      static_cast<uint8_t>(index >> 8), sub,
-                                      static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
-                                      static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 24)}));
+    frame(od::CanFrame(0x600 + node,
+                       {0x23, static_cast<uint8_t>(index), static_cast<uint8_t>(index >> 8), sub,
+                        static_cast<uint8_t>(v), static_cast<uint8_t>(v >> 8),
+                        static_cast<uint8_t>(v >> 16), static_cast<uint8_t>(v >> 24)}));
   }
   // The states heartbeats of `node` carried, in order.
   std::vector<uint8_t> heartbeats(uint8_t node, size_t from = 0) const {
     std::vector<uint8_t> out;
     for (size_t i = from; i < bus.size(); ++i)
-      if (bus[i].id == 0x700u + node && !bus[i].rtr && bus[i].dlc == 1) out.push_back(bus[i].data[0]);
+      if (bus[i].id == 0x700u + node && !bus[i].rtr && bus[i].dlc == 1)
+        out.push_back(bus[i].data[0]);
     return out;
   }
   size_t count(uint32_t id, size_t from = 0) const {
@@ -65,9 +65,10 @@ class NodeSetTest : public ::testing::Test {
                                              [id](const od::CanFrame& f) { return f.id == id; }));
   }
   bool emcy_from(uint8_t node, uint16_t code, size_t from = 0) const {
-    return std::any_of(bus.begin() + static_cast<long>(from), bus.end(), [&](const od::CanFrame& f) {
-      return f.id == 0x80u + node && f.dlc == 8 && (f.data[0] | f.data[1] << 8) == code;
-    });
+    return std::any_of(
+        bus.begin() + static_cast<long>(from), bus.end(), [&](const od::CanFrame& f) {
+          return f.id == 0x80u + node && f.dlc == 8 && (f.data[0] | f.data[1] << 8) == code;
+        });
   }
 
   TempDir dir;
@@ -180,9 +181,9 @@ TEST_F(NodeSetTest, TheKernelFilterIsTheUnionOfTheNodesFilters) {
     return std::find(kernel.begin(), kernel.end(), ReceiveFilter{id, frames}) != kernel.end();
   };
   using F = ReceiveFilter::Frames;
-  EXPECT_TRUE(has(0x000, F::Data));           // NMT, once
-  EXPECT_TRUE(has(0x7E5, F::Data));           // LSS master to slave
-  EXPECT_TRUE(has(0x601, F::Data));           // SDO servers
+  EXPECT_TRUE(has(0x000, F::Data));  // NMT, once
+  EXPECT_TRUE(has(0x7E5, F::Data));  // LSS master to slave
+  EXPECT_TRUE(has(0x601, F::Data));  // SDO servers
   EXPECT_TRUE(has(0x602, F::Data));
   EXPECT_TRUE(has(0x701, F::DataAndRemote));  // node guarding, the duplicate check
   EXPECT_TRUE(has(0x702, F::DataAndRemote));
