@@ -179,3 +179,12 @@ def test_nodes_of_one_process_are_independent(start_node, node_config, master):
     assert master.sdo_request(5, struct.pack("<BHB4x", 0x40, 0x1017, 0), timeout=0.5) is None
     assert sdo(master, 4, struct.pack("<BHB4x", 0x40, 0x1000, 0))[0] == 0x43
     assert proc.alive
+
+
+@pytest.mark.parametrize("ids", ["0-3", "1-128", "1-5,5", "1,none", "9-3"])
+def test_a_bad_node_id_list_is_one_line_and_status_2(stepnode_bin, tmp_path, ids):
+    r = subprocess.run([str(stepnode_bin), "--iface", CHANNEL, "--node-id", ids, "--state-dir", str(tmp_path)],
+                       capture_output=True, text=True, timeout=20)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"stepnode: --node-id {ids}: "), r.stderr

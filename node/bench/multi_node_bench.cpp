@@ -4,7 +4,7 @@
 // the earliest deadline of all nodes. No CAN socket: the frames the process sends are
 // stamped on CLOCK_MONOTONIC as they leave and the heartbeat periods are measured on them.
 // Prints figures; asserts nothing.
-//   build/node/multi_node_bench [--nodes 127] [--seconds 10] [--operational]
+//   build/node/multi_node_bench [--nodes 127] [--seconds 10] [--operational] [--consumers]
 //   build/node/multi_node_bench --virtual [--seconds 60]   (virtual time, for callgrind:
 //     valgrind --tool=callgrind build/node/multi_node_bench --virtual --seconds 60)
 #include <sys/resource.h>
@@ -34,6 +34,7 @@ struct Args {
   double seconds = 10;
   bool virtual_time = false;
   bool operational = false;
+  bool consumers = false;  // every node watches node 1's heartbeat (0x1016:1, 150 ms)
 };
 
 Args parse(int argc, char** argv) {
@@ -44,10 +45,11 @@ Args parse(int argc, char** argv) {
     else if (k == "--seconds" && i + 1 < argc) a.seconds = std::atof(argv[++i]);
     else if (k == "--virtual") a.virtual_time = true;
     else if (k == "--operational") a.operational = true;
+    else if (k == "--consumers") a.consumers = true;
     else {
       std::fprintf(stderr,
                    "usage: multi_node_bench [--nodes 1..127] [--seconds S] [--virtual] "
-                   "[--operational]\n");
+                   "[--operational] [--consumers]\n");
       std::exit(2);
     }
   }
@@ -102,7 +104,13 @@ std::vector<node::NodeOptions> options(const Args& a, const std::filesystem::pat
   return node::options_per_node(base, node::parse_node_id_list("1-" + std::to_string(a.nodes)));
 }
 
-const node::Device::ObjectDefaults kDefaults{{"1017", std::to_string(kPeriodUs / 1000)}};
+// 0x1017 = 100 ms; with --consumers 0x1016:1 = node 1, 150 ms (a master's 1.5x): node 1's
+// heartbeats then reach the 126 other nodes of the process by local delivery.
+node::Device::ObjectDefaults defaults(const Args& a) {
+  node::Device::ObjectDefaults d{{"1017", std::to_string(kPeriodUs / 1000)}};
+  if (a.consumers) d.emplace_back("1016:1", "0x00010096");
+  return d;
+}
 
 void start_all(node::NodeSet& set, const Args& a, uint64_t now) {
   set.start(now);
@@ -112,17 +120,20 @@ void start_all(node::NodeSet& set, const Args& a, uint64_t now) {
 // Real clock: the event loop of node/node_process.cpp without the socket.
 void run_real(const Args& a, const std::filesystem::path& dir) {
   HeartbeatLog log;
-  node::NodeSet set(options(a, dir), kDefaults,
+  node::NodeSet set(options(a, dir), defaults(a),
                     [&log](const od::CanFrame& f) { log.record(f, canio::EventLoop::now_us()); });
   canio::EventLoop loop;
   int timer = -1;
   const uint64_t begin = canio::EventLoop::now_us();
   const uint64_t end = begin + static_cast<uint64_t>(a.seconds * 1e6);
   auto arm = [&] { loop.arm_at(timer, std::min(set.next_deadline_us(), end)); };
+  std::vector<uint64_t> busy_us;  // how long each wake-up that sent something took
   timer = loop.add_timer([&] {
     const uint64_t now = canio::EventLoop::now_us();
     if (now >= end) return loop.stop();
+    const uint64_t frames = log.frames;
     set.on_tick(now);
+    if (log.frames != frames) busy_us.push_back(canio::EventLoop::now_us() - now);
     arm();
   });
   const double cpu0 = bench::cpu_seconds();
@@ -138,6 +149,11 @@ void run_real(const Args& a, const std::filesystem::path& dir) {
   log.print();
   std::printf("  CPU share %.3f %% (user+system / wall), max RSS %.1f MiB\n", 100 * cpu / wall,
               rss_mib());
+  std::sort(busy_us.begin(), busy_us.end());
+  if (!busy_us.empty())
+    std::printf("  a wake-up that sends heartbeats: median %llu us, max %llu us\n",
+                static_cast<unsigned long long>(busy_us[busy_us.size() / 2]),
+                static_cast<unsigned long long>(busy_us.back()));
   std::printf("  wake-ups %.1f /s, frames sent %.1f /s, local deliveries %.1f /s\n",
               static_cast<double>(loop.wakeups()) / wall, static_cast<double>(log.frames) / wall,
               static_cast<double>(set.local_deliveries()) / wall);
@@ -148,7 +164,7 @@ void run_real(const Args& a, const std::filesystem::path& dir) {
 void run_virtual(const Args& a, const std::filesystem::path& dir) {
   HeartbeatLog log;
   uint64_t t = 1'000'000;
-  node::NodeSet set(options(a, dir), kDefaults, [&](const od::CanFrame& f) { log.record(f, t); });
+  node::NodeSet set(options(a, dir), defaults(a), [&](const od::CanFrame& f) { log.record(f, t); });
   start_all(set, a, t);
   const uint64_t end = t + static_cast<uint64_t>(a.seconds * 1e6);
   uint64_t wakeups = 0;
@@ -160,9 +176,9 @@ void run_virtual(const Args& a, const std::filesystem::path& dir) {
   std::printf("multi_node_bench: %u nodes, heartbeat 100 ms, %s, %.1f s virtual time\n", a.nodes,
               a.operational ? "operational" : "pre-operational", a.seconds);
   log.print();
-  std::printf("  wake-ups %.1f /s of bus time, frames sent %.1f /s\n",
-              static_cast<double>(wakeups) / a.seconds,
-              static_cast<double>(log.frames) / a.seconds);
+  std::printf("  wake-ups %.1f /s of bus time, frames sent %.1f /s, local deliveries %.1f /s\n",
+              static_cast<double>(wakeups) / a.seconds, static_cast<double>(log.frames) / a.seconds,
+              static_cast<double>(set.local_deliveries()) / a.seconds);
 }
 
 }  // namespace

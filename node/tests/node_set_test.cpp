@@ -191,8 +191,9 @@ TEST_F(NodeSetTest, TheKernelFilterIsTheUnionOfTheNodesFilters) {
   EXPECT_EQ(std::count_if(kernel.begin(), kernel.end(), [](auto& f) { return f.id == 0; }), 1);
 }
 
-// 127 nodes want more CAN-IDs than a socket takes filters (at least 0x580+id, 0x600+id and
-// 0x700+id each: 381, plus their EMCY and RPDO COB-IDs): no kernel filter, software routing.
+// 127 nodes want more CAN-IDs than a socket takes filters (CiA 301's predefined connection
+// set gives each node 0x80+id, 0x200/0x300/0x400/0x500+id, 0x580+id, 0x600+id and 0x700+id:
+// 1,016 in all): no kernel filter, software routing.
 TEST_F(NodeSetTest, AboveTheKernelLimitEveryFrameComesAndIsRoutedInSoftware) {
   make(parse_node_id_list("1-127"));
   EXPECT_EQ(std::count_if(bus.begin(), bus.end(), [](auto& f) { return f.data[0] == kBootUp; }),
