@@ -151,6 +151,32 @@ TEST_F(NodeSetTest, ANodeHearsTheHeartbeatOfAnotherNodeOfTheSet) {
   EXPECT_FALSE(emcy_from(1, emcy_code::kHeartbeatError, from));
 }
 
+// Node 1 produces SYNC (0x1005 bit 30, 0x1006 = 10 ms); node 2's TPDO1 is synchronous
+// (0x1800:2 = 1: after every SYNC). On the bus each of node 2's TPDOs follows a SYNC of
+// node 1: the SYNC reached node 2 inside the process, before what it caused.
+TEST_F(NodeSetTest, ASyncOfOneNodeDrivesTheSynchronousPdosOfAnother) {
+  make({1, 2});
+  sdo_write_u32(1, 0x1006, 0, 10'000);
+  sdo_write_u32(1, 0x1005, 0, 0x40000080);
+  sdo_write_u32(2, 0x1800, 1, 0x80000182);  // invalid while its type changes
+  frame(od::CanFrame(0x602, {0x2F, 0x00, 0x18, 0x02, 0x01, 0, 0, 0}));
+  sdo_write_u32(2, 0x1800, 1, 0x00000182);
+  frame(od::CanFrame(0x000, {0x01, 0}));  // start all
+  const size_t from = bus.size();
+  advance_ms(100);
+  std::vector<uint32_t> order;
+  for (size_t i = from; i < bus.size(); ++i)
+    if (bus[i].id == 0x080 || bus[i].id == 0x182) order.push_back(bus[i].id);
+  ASSERT_GE(order.size(), 18u) << "10 SYNCs and their TPDOs in 100 ms";
+  size_t tpdos = 0;
+  for (size_t i = 0; i < order.size(); ++i) {
+    if (order[i] != 0x182) continue;
+    ++tpdos;
+    EXPECT_EQ(order[i - 1], 0x080u) << "a TPDO not right after a SYNC, at " << i;
+  }
+  EXPECT_GE(tpdos, 9u);
+}
+
 TEST_F(NodeSetTest, EachNodeHasItsOwnSerialNumberAndStateFiles) {
   make({1, 2, 3});
   for (size_t i = 0; i < 3; ++i)
