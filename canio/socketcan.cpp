@@ -10,7 +10,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <stdexcept>
 
@@ -99,6 +101,18 @@ void SocketCan::set_error_filter(uint32_t classes) {
   can_err_mask_t mask = classes & CAN_ERR_MASK;
   if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &mask, sizeof mask) != 0)
     fail(iface_, "setsockopt CAN_RAW_ERR_FILTER");
+}
+
+size_t SocketCan::request_receive_buffer(size_t bytes) {
+  // The kernel takes an int and doubles it (for its bookkeeping) up to INT_MAX.
+  const int asked = static_cast<int>(std::min<size_t>(bytes, INT_MAX / 2));
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &asked, sizeof asked) != 0 &&
+      ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &asked, sizeof asked) != 0)
+    spdlog::warn("{}: receive buffer of {} bytes refused: {}", iface_, bytes, std::strerror(errno));
+  int now = 0;
+  socklen_t size = sizeof now;
+  if (::getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &now, &size) != 0) return 0;
+  return static_cast<size_t>(now);
 }
 
 std::optional<ReceivedFrame> SocketCan::receive() {

@@ -54,6 +54,12 @@ class SocketCan {
   void set_filters(const std::vector<Filter>& filters);
   // The error frame classes (CAN_ERR_* bits) the socket receives; all by default.
   void set_error_filter(uint32_t classes);
+  // Asks for a receive queue of `bytes`, so a burst of frames (many nodes behind one
+  // socket) is queued rather than dropped: SO_RCVBUFFORCE (CAP_NET_ADMIN, may exceed
+  // net.core.rmem_max), else SO_RCVBUF (capped by the kernel at rmem_max). Never fails: the
+  // queue keeps what the kernel granted. Returns the size the socket has now, as the kernel
+  // counts it (getsockopt SO_RCVBUF: about twice what was asked, its overhead included).
+  size_t request_receive_buffer(size_t bytes);
 
   // Reads one frame if one is waiting.
   std::optional<ReceivedFrame> receive();

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "config/toml_file.hpp"
+#include "node/node_id_list.hpp"
 #include "od/pdo_mapping.hpp"
 
 namespace stepnode::node {
@@ -28,18 +29,31 @@ struct GivenOnCommandLine {
   bool state_dir = false;
 };
 
-// node_id: 1..127, or "none" (255, CiA 305's invalid node-ID): the node waits for an LSS
-// master. Returns true when the file has the key.
+// node_id: 1..127, "none" (255, CiA 305's invalid node-ID): the node waits for an LSS
+// master; or a list "1-32" / "1,5,10-12": that many nodes in the process. Returns true when
+// the file has the key.
 bool load_node_id(const config::TomlFile& file, NodeConfig& cfg, bool id_given) {
   const toml::node* v = file.table().get("node_id");
   if (!v) return false;
-  const int64_t id = v->value_exact<int64_t>().value_or(-1);  // -1: not an integer
-  const bool none = v->value_exact<std::string>() == "none" || id == lss::kUnconfigured;
-  if (!none && (id < 1 || id > 127))
-    file.refuse("node_id", "must be an integer 1..127, or \"none\" (255)");
+  const char* rule = "must be an integer 1..127, \"none\" (255), or a list such as \"1-32\"";
+  const auto text = v->value_exact<std::string>();
+  int64_t id = v->value_exact<int64_t>().value_or(-1);  // -1: not an integer
+  std::vector<uint8_t> ids;
+  if (text && *text != "none") {
+    try {
+      ids = parse_node_id_list(*text);
+    } catch (const std::invalid_argument&) {
+      file.refuse("node_id", rule);
+    }
+    if (ids.size() == 1) file.refuse("node_id", rule);  // one id is an integer, not text
+    id = ids.front();
+  }
+  const bool none = text == "none" || id == lss::kUnconfigured;
+  if (!none && (id < 1 || id > 127)) file.refuse("node_id", rule);
   if (!id_given) {
     cfg.options.device.node_id = none ? lss::kUnconfigured : static_cast<uint8_t>(id);
     cfg.options.node_id_origin = none ? NodeIdOrigin::None : NodeIdOrigin::ConfigFile;
+    cfg.node_ids = ids;
   }
   return true;
 }
@@ -118,6 +132,41 @@ uint32_t parse_serial_number(const std::string& text) {
   return static_cast<uint32_t>(n);
 }
 
+// --node-id: one id, none (255), or a list of ids and ranges (node/node_id_list.hpp).
+void apply_node_id_argument(const std::string& text, NodeConfig& cfg) {
+  if (text == "none" || text == "255") {
+    // The command line gives none: an id stored over LSS, else the config file's, applies.
+    if (cfg.options.node_id_origin == NodeIdOrigin::CommandLine) {
+      cfg.options.device.node_id = lss::kUnconfigured;
+      cfg.options.node_id_origin = NodeIdOrigin::None;
+      cfg.node_ids.clear();
+    }
+    return;
+  }
+  std::vector<uint8_t> ids;
+  try {
+    ids = parse_node_id_list(text);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError("--node-id " + text + ": " + e.what() +
+                     "; must be 1..127, none (255), or a list such as 1-32 or 1,5,10-12");
+  }
+  cfg.options.device.node_id = ids.front();
+  cfg.options.node_id_origin = NodeIdOrigin::CommandLine;
+  if (ids.size() == 1) ids.clear();
+  cfg.node_ids = ids;
+}
+
+// Node k of a set has serial number + k (its own LSS address): all must fit UNSIGNED32.
+void check_serial_numbers(const NodeConfig& cfg) {
+  if (cfg.node_ids.empty()) return;
+  const uint64_t last = uint64_t{cfg.options.device.serial_number} + cfg.node_ids.size() - 1;
+  if (last > 0xFFFFFFFFull)
+    throw UsageError("--serial-number " + std::to_string(cfg.options.device.serial_number) +
+                     ": the " + std::to_string(cfg.node_ids.size()) +
+                     " nodes get serial numbers up to " + std::to_string(last) +
+                     ", above 4294967295");
+}
+
 }  // namespace
 
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
@@ -131,7 +180,8 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
   app.add_option("--node-id", node_id,
                  "CANopen node id, 1..127, or none (255): no id, the node waits for an LSS master "
-                 "(an id an LSS master stored is used then, else the config file's)");
+                 "(an id an LSS master stored is used then, else the config file's); or a "
+                 "list such as 1-32 or 1,5,10-12: one node per id in this process");
   app.add_option(
       "--serial-number", serial_number,
       "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
@@ -158,29 +208,10 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
     id_known |=
         load_config_file(config_file, cfg, {!cfg.iface.empty(), id_given, !state_dir.empty()});
   }
-  if (app.count("--node-id")) {
-    int id = -1;
-    if (node_id == "none") {
-      id = lss::kUnconfigured;
-    } else {
-      auto [end, ec] = std::from_chars(node_id.data(), node_id.data() + node_id.size(), id);
-      if (ec != std::errc() || end != node_id.data() + node_id.size()) id = -1;
-    }
-    if (id != lss::kUnconfigured && (id < 1 || id > 127))
-      throw UsageError("--node-id " + node_id + ": must be 1..127, or none (255)");
-    if (id == lss::kUnconfigured) {
-      // The command line gives none: an id stored over LSS, else the config file's, applies.
-      if (cfg.options.node_id_origin == NodeIdOrigin::CommandLine) {
-        cfg.options.device.node_id = lss::kUnconfigured;
-        cfg.options.node_id_origin = NodeIdOrigin::None;
-      }
-    } else {
-      cfg.options.device.node_id = static_cast<uint8_t>(id);
-      cfg.options.node_id_origin = NodeIdOrigin::CommandLine;
-    }
-  }
+  if (app.count("--node-id")) apply_node_id_argument(node_id, cfg);
   if (app.count("--serial-number"))
     cfg.options.device.serial_number = parse_serial_number(serial_number);
+  check_serial_numbers(cfg);
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
   if (cfg.tick_us < 100 || cfg.tick_us > 10'000'000)

@@ -14,7 +14,10 @@ namespace stepnode::node {
 
 struct NodeConfig {
   std::string iface;
-  NodeOptions options;
+  NodeOptions options;  // of the one node, or the first of node_ids
+  // --node-id 1-32 (or a config's node_id = "1-32"): every node of the process, ascending
+  // (node/node_id_list.hpp gives each its options). Empty: the one node of `options`.
+  std::vector<uint8_t> node_ids;
   uint64_t tick_us =
       1'000'000;  // the longest the node sleeps (issue 13: it wakes for its deadlines)
   std::string log_level = "info";
