@@ -253,10 +253,14 @@ def start_bridge(domain, stepbridge_bin, tmp_path):
     bridges: List[Process] = []
     counter = itertools.count(1)
 
-    def _start(*extra) -> Process:
+    def _start(*extra, niceness: int = 0) -> Process:
         n = next(counter)
-        argv = [str(stepbridge_bin), "--iface", CHANNEL, "--domain", str(domain), "--log-level", "debug",
-                *map(str, extra)]
+        extra = [str(e) for e in extra]
+        level = [] if "--log-level" in extra else ["--log-level", "debug"]  # a test may ask for less
+        # Under nice(1) every thread of the bridge (Fast DDS starts several) has the niceness;
+        # setpriority() on the pid afterwards would reach the main thread only.
+        prefix = ["nice", "-n", str(niceness)] if niceness else []
+        argv = [*prefix, str(stepbridge_bin), "--iface", CHANNEL, "--domain", str(domain), *level, *extra]
         b = Process(argv, tmp_path / f"stepbridge-{n}.log")
         bridges.append(b)
         time.sleep(0.2)
