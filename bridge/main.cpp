@@ -45,6 +45,11 @@ void block_stop_signals() {
 int run(const bridge::BridgeConfig& cfg) {
   block_stop_signals();
   canio::SocketCan can(cfg.iface);  // throws: no such interface, not a CAN device
+  // The bridge hears the whole bus: a full bus of 127 nodes sends 1,270 heartbeats a second
+  // and, at an NMT start of all, hundreds of TPDOs at once. The kernel's default queue (about
+  // 200 KiB, charged per frame's buffer) is asked to grow to 1 MiB so that such a burst waits
+  // while DDS publishes; the size granted is logged.
+  spdlog::info("{}: receive buffer {} bytes", cfg.iface, can.request_receive_buffer(1 << 20));
 
   bridge::dds::PublisherOptions options;
   options.participant.domain = cfg.domain;
