@@ -5,11 +5,22 @@
 
 namespace stepnode::motion {
 
-Tick StepGenerator::interval_length(Rational z, int64_t k) const {
-  // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den).
-  __int128 n = z.num;  // k * num can pass 2^63 for long, fine-grained ramps
-  Tick len = static_cast<Tick>((k + 1) * n / z.den - k * n / z.den);
-  return std::max<Tick>(len, 1);
+Tick StepGenerator::interval_length(Rational z, int64_t k) {
+  // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den); the
+  // cursor walks them with additions (ramp_intervals.hpp). With Z < 1 some are 0 long: the
+  // velocity rises by several levels at one tick, so every slope is honoured (issue 13;
+  // before, each level took at least a tick: the slope was capped at one level per tick).
+  return cursor_.length(z, k);
+}
+
+void StepGenerator::skip_empty_intervals(int64_t most) {
+  // A run of 0-long intervals after this one: their levels all come at this tick, passed
+  // at once (up to `most` levels, where the ramp ends or holds).
+  if (interval_end_ != t_ || most <= 0) return;
+  const int64_t m = std::min(cursor_.zeros_after(), most);
+  cursor_.skip_zeros(m);
+  interval_index_ += m;
+  level_ += phase_ == MotionPhase::Accelerating ? m : -m;
 }
 
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
@@ -61,7 +72,15 @@ std::optional<int64_t> StepGenerator::remaining() const {
 
 bool StepGenerator::decel_needed() const {
   // Steps the deceleration ramp yields from here: the phase it adds plus what is already
-  // accumulated, in whole steps.
+  // accumulated, in whole steps. Far from the turn (every step but the last few of a ramp
+  // up) an estimate in doubles decides; near it, the exact 128-bit phase.
+  const double left = static_cast<double>(*remaining()) * static_cast<double>(ramp_.phase_per_step);
+  const double span = static_cast<double>(level_ - ramp_.base_level);
+  const double sum = span * static_cast<double>(level_ + ramp_.base_level + 1) / 2;
+  const Rational z = ramp_.decel_ticks_per_level;
+  const double estimate =
+      sum * static_cast<double>(z.num) / static_cast<double>(z.den) + static_cast<double>(acc_);
+  if (left > estimate * (1 + 1e-9) + 2) return false;
   __int128 phase = ramp_.decel_phase(level_) + acc_;
   return static_cast<__int128>(*remaining()) * ramp_.phase_per_step <= phase;
 }
@@ -106,6 +125,7 @@ void StepGenerator::end_interval() {
     ++level_;
     ++interval_index_;
     interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, interval_index_);
+    skip_empty_intervals(peak_level_ - level_);
     return;
   }
   // Decelerating: to a lower running velocity, or to base.
@@ -137,9 +157,14 @@ void StepGenerator::end_interval() {
   --level_;
   ++interval_index_;
   interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, interval_index_);
+  const int64_t floor =
+      std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
+  skip_empty_intervals(level_ - floor);
 }
 
 bool StepGenerator::next(Step& out) {
+  // A peek() that walked plain ramp intervals left where it got to: start from there.
+  if (peeked_ != kUnpeeked && ahead_.valid) ahead_.restore(*this);
   peeked_ = kUnpeeked;  // the next step may move
   if (scurve_) return s_next(out);
   for (;;) {
@@ -149,14 +174,16 @@ bool StepGenerator::next(Step& out) {
     // The invariants every front end's input must keep (checked in the sanitizer build): a
     // moving level (the next step's time divides by it) and a phase inside one step.
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
-    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-    if (ramping && t_ + need > interval_end_) {
-      acc_ += level_ * (interval_end_ - t_);  // stays below d: no step in this stretch
+    // A ramp interval whose whole phase stays below d has no step (the same test as the
+    // ticks the step needs against the interval's end, without the division).
+    if (ramping && static_cast<__int128>(level_) * (interval_end_ - t_) < d - acc_) {
+      acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
       continue;
     }
+    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
     if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
       acc_ += level_ * (decel_tick_ - t_);
       t_ = decel_tick_;
@@ -189,20 +216,49 @@ std::optional<Tick> StepGenerator::peek() {
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
-  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) {
-    // Most steps fall inside a ramp interval or a run: the step next() takes, without a copy.
-    const int64_t d = ramp_.phase_per_step;
-    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
-    const bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
-    if (!(ramping && at > interval_end_) && !decel_first) peeked_ = at;
-  }
+  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) peeked_ = peek_plain();
   if (peeked_ == kUnpeeked) {
     StepGenerator copy = *this;
     Step s;
     peeked_ = copy.next(s) ? s.time : kNoStep;
   }
   return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
+}
+
+Tick StepGenerator::peek_plain() {
+  // Most steps fall inside a run, a creep or a ramp interval reached by plain level changes
+  // (one up or down, the phase unchanged): the step next() takes, found without copying the
+  // generator. Anything else first (a ramp's end, the deceleration point): kUnpeeked.
+  ahead_.valid = false;
+  const int64_t d = ramp_.phase_per_step;
+  if (phase_ != MotionPhase::Accelerating && phase_ != MotionPhase::Decelerating) {
+    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
+    return decel_first ? kUnpeeked : at;
+  }
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  Ahead a{true, t_, acc_, level_, interval_index_, interval_end_, cursor_};
+  while (static_cast<__int128>(a.level) * (a.end - a.t) < d - a.acc) {
+    // end_interval()'s cases other than one level up or down (same order).
+    const bool special = up ? a.level >= peak_level_
+                            : (holding_ && !stopping_ && a.level <= decel_floor_ + 1) ||
+                                  a.level <= ramp_.base_level + 1;
+    if (special) return kUnpeeked;
+    a.acc += a.level * (a.end - a.t);
+    a.t = a.end;
+    a.level += up ? 1 : -1;
+    ++a.index;
+    a.end = a.t + a.cursor.length(z, a.index);
+    if (a.end == a.t) return kUnpeeked;  // levels at one tick: next() passes them at once
+  }
+  if (a.index != interval_index_) ahead_ = a;  // next() goes on from there
+  return a.t + (d - a.acc + a.level - 1) / a.level;
+}
+
+void StepGenerator::Ahead::restore(StepGenerator& g) const {
+  g.t_ = t, g.acc_ = acc, g.level_ = level;
+  g.interval_index_ = index, g.interval_end_ = end, g.cursor_ = cursor;
 }
 
 void StepGenerator::advance_to(Tick at) {
