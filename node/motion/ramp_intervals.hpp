@@ -19,14 +19,18 @@ class IntervalCursor {
  public:
   // floor((k+1)·z.num/z.den) − floor(k·z.num/z.den); z.num >= 0, z.den > 0, k >= 0.
   Tick length(Rational z, int64_t k) {
-    if (k == k_ + 1 && z.num == z_.num && z.den == z_.den) {
-      rem_ += rho_;
-      const bool carry = rem_ >= z_.den;
-      rem_ -= carry ? z_.den : 0;
-      k_ = k;
-      return q_ + (carry ? 1 : 0);
-    }
+    if (k == k_ + 1 && z.num == z_.num && z.den == z_.den) return next_length();
     return seek(z, k);
+  }
+  // Whether the last length given was that of interval k of z.
+  bool at(Rational z, int64_t k) const { return k == k_ && z.num == z_.num && z.den == z_.den; }
+  // The length of the interval after the last one given (same Z).
+  Tick next_length() {
+    rem_ += rho_;
+    const bool carry = rem_ >= z_.den;
+    rem_ -= carry ? z_.den : 0;
+    ++k_;
+    return q_ + (carry ? 1 : 0);
   }
   // After a length of 0 (a slope steeper than one level per tick: Z < 1), how many of the
   // next intervals are 0 long too (their levels come at the same tick): the remainder may

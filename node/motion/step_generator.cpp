@@ -238,22 +238,29 @@ Tick StepGenerator::peek_plain() {
   }
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
+  // end_interval()'s cases other than one level up or down begin at this level: the ramp's
+  // top, or the level a ramp down ends or holds at.
+  const int64_t last =
+      up ? peak_level_
+         : std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
+  const int64_t dir = up ? 1 : -1;
   Ahead a{true, t_, acc_, level_, interval_index_, interval_end_, cursor_};
-  while (static_cast<__int128>(a.level) * (a.end - a.t) < d - a.acc) {
-    // end_interval()'s cases other than one level up or down (same order).
-    const bool special = up ? a.level >= peak_level_
-                            : (holding_ && !stopping_ && a.level <= decel_floor_ + 1) ||
-                                  a.level <= ramp_.base_level + 1;
-    if (special) return kUnpeeked;
-    a.acc += a.level * (a.end - a.t);
+  int64_t left = d - a.acc;  // phase still to come before the step
+  // level * length stays far inside int64 where no step falls: below one step's phase.
+  while (a.level * (a.end - a.t) < left) {
+    if (up ? a.level >= last : a.level <= last) return kUnpeeked;
+    left -= a.level * (a.end - a.t);
     a.t = a.end;
-    a.level += up ? 1 : -1;
+    a.level += dir;
     ++a.index;
-    a.end = a.t + a.cursor.length(z, a.index);
-    if (a.end == a.t) return kUnpeeked;  // levels at one tick: next() passes them at once
+    const Tick len = a.cursor.next_length();
+    if (len == 0) return kUnpeeked;  // levels at one tick: next() passes them at once
+    a.end = a.t + len;
   }
+  a.acc = d - left;
   if (a.index != interval_index_) ahead_ = a;  // next() goes on from there
-  return a.t + (d - a.acc + a.level - 1) / a.level;
+  return a.t + (left + a.level - 1) / a.level;
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {

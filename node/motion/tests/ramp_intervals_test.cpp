@@ -38,7 +38,8 @@ TEST(IntervalCursor, EveryLengthIsTheFormulasInOrderAndAfterJumps) {
 TEST(IntervalCursor, ZerosAfterCountsTheIntervalsAtTheSameTick) {
   std::mt19937_64 rng(7);
   for (int ramp = 0; ramp < 500; ++ramp) {
-    const Rational z{1 + static_cast<int64_t>(rng() % 1000), 1001 + static_cast<int64_t>(rng() % 100'000)};
+    const Rational z{1 + static_cast<int64_t>(rng() % 1000),
+                     1001 + static_cast<int64_t>(rng() % 100'000)};
     IntervalCursor c;
     for (int64_t k = 0; k < 2'000;) {
       const Tick len = c.length(z, k);
