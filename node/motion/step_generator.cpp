@@ -163,10 +163,13 @@ void StepGenerator::end_interval() {
 }
 
 bool StepGenerator::next(Step& out) {
+  if (scurve_) {
+    peeked_ = kUnpeeked;  // the next step may move
+    return s_next(out);
+  }
   // A peek() that walked plain ramp intervals left where it got to: start from there.
   if (peeked_ != kUnpeeked && ahead_.valid) ahead_.restore(*this);
   peeked_ = kUnpeeked;  // the next step may move
-  if (scurve_) return s_next(out);
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
     // Read each turn: reaching a velocity may move the motion to another grid (adopt).
@@ -216,7 +219,17 @@ std::optional<Tick> StepGenerator::peek() {
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
-  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) peeked_ = peek_plain();
+  if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) {
+    if (phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating) {
+      peeked_ = peek_plain();
+    } else {
+      // A run or a creep: the step next() takes, unless the deceleration point comes first.
+      ahead_.valid = false;
+      const int64_t d = ramp_.phase_per_step;
+      const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+      if (!(phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_)) peeked_ = at;
+    }
+  }
   if (peeked_ == kUnpeeked) {
     StepGenerator copy = *this;
     Step s;
@@ -226,16 +239,11 @@ std::optional<Tick> StepGenerator::peek() {
 }
 
 Tick StepGenerator::peek_plain() {
-  // Most steps fall inside a run, a creep or a ramp interval reached by plain level changes
-  // (one up or down, the phase unchanged): the step next() takes, found without copying the
-  // generator. Anything else first (a ramp's end, the deceleration point): kUnpeeked.
+  // In a ramp, most steps fall in an interval reached by plain level changes (one up or
+  // down, the phase unchanged): the step next() takes, found without copying the
+  // generator. Anything else first (the ramp's end, its top): kUnpeeked.
   ahead_.valid = false;
   const int64_t d = ramp_.phase_per_step;
-  if (phase_ != MotionPhase::Accelerating && phase_ != MotionPhase::Decelerating) {
-    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
-    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
-    return decel_first ? kUnpeeked : at;
-  }
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)

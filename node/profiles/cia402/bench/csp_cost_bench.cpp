@@ -29,8 +29,7 @@ struct Counting : stepnode::sim::AxisMachine {
 };
 
 // Not inlined: callgrind's --toggle-collect names it.
-[[gnu::noinline]] int64_t run_cycles(stepnode::cia402::Drive& drive, int cycles,
-                                     double amplitude) {
+[[gnu::noinline]] int64_t run_cycles(stepnode::cia402::Drive& drive, int cycles, double amplitude) {
   constexpr int kHz = 1000;
   constexpr double kPeriodS = 2;
   const Tick cycle = kClockHz / kHz;
@@ -60,7 +59,6 @@ int main(int argc, char** argv) {
   for (uint16_t cw : {0x06, 0x07, 0x0F}) drive.controlword(cw, 0);
   const int64_t end = run_cycles(drive, cycles, amplitude);
   std::printf("csp: %lld steps in %d SYNC cycles of 1 ms (sine of %.0f steps), end at %lld\n",
-              static_cast<long long>(motor.steps), cycles, amplitude,
-              static_cast<long long>(end));
+              static_cast<long long>(motor.steps), cycles, amplitude, static_cast<long long>(end));
   return 0;
 }
