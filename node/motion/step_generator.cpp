@@ -168,7 +168,7 @@ bool StepGenerator::next(Step& out) {
     return s_next(out);
   }
   // A peek() that walked plain ramp intervals left where it got to: start from there.
-  if (peeked_ != kUnpeeked && ahead_.valid) ahead_.restore(*this);
+  if (ahead_.valid && peeked_ != kUnpeeked) ahead_.restore(*this);
   peeked_ = kUnpeeked;  // the next step may move
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
@@ -179,8 +179,9 @@ bool StepGenerator::next(Step& out) {
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
     // A ramp interval whose whole phase stays below d has no step (the same test as the
-    // ticks the step needs against the interval's end, without the division).
-    if (ramping && static_cast<__int128>(level_) * (interval_end_ - t_) < d - acc_) {
+    // ticks the step needs against the interval's end, without the division; level times
+    // an interval's length is of the order of the ramp's ticks, far inside int64).
+    if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
