@@ -254,22 +254,24 @@ Tick StepGenerator::peek_plain() {
       up ? peak_level_
          : std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
   const int64_t dir = up ? 1 : -1;
-  Ahead a{true, t_, acc_, level_, interval_index_, interval_end_, cursor_};
-  int64_t left = d - a.acc;  // phase still to come before the step
+  const int64_t plain = up ? last - level_ : level_ - last;  // level changes before `last`
+  int64_t level = level_, left = d - acc_, passed = 0;       // left: phase still to come
+  Tick t = t_, end = interval_end_;
+  IntervalCursor cursor = cursor_;
   // level * length stays far inside int64 where no step falls: below one step's phase.
-  while (a.level * (a.end - a.t) < left) {
-    if (up ? a.level >= last : a.level <= last) return kUnpeeked;
-    left -= a.level * (a.end - a.t);
-    a.t = a.end;
-    a.level += dir;
-    ++a.index;
-    const Tick len = a.cursor.next_length();
+  for (int64_t phase; (phase = level * (end - t)) < left;) {
+    if (passed >= plain) return kUnpeeked;
+    left -= phase;
+    t = end;
+    level += dir;
+    ++passed;
+    const Tick len = cursor.next_length();
     if (len == 0) return kUnpeeked;  // levels at one tick: next() passes them at once
-    a.end = a.t + len;
+    end = t + len;
   }
-  a.acc = d - left;
-  if (a.index != interval_index_) ahead_ = a;  // next() goes on from there
-  return a.t + (left + a.level - 1) / a.level;
+  // next() goes on from there.
+  if (passed > 0) ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
+  return t + (left + level - 1) / level;
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {
