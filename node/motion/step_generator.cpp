@@ -5,11 +5,22 @@
 
 namespace stepnode::motion {
 
-Tick StepGenerator::interval_length(Rational z, int64_t k) const {
-  // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den).
-  __int128 n = z.num;  // k * num can pass 2^63 for long, fine-grained ramps
-  Tick len = static_cast<Tick>((k + 1) * n / z.den - k * n / z.den);
-  return std::max<Tick>(len, 1);
+Tick StepGenerator::interval_length(Rational z, int64_t k) {
+  // Bresenham over a fractional Z: the interval ends fall on floor(k * num / den); the
+  // cursor walks them with additions (ramp_intervals.hpp). With Z < 1 some are 0 long: the
+  // velocity rises by several levels at one tick, so every slope is honoured (issue 13;
+  // before, each level took at least a tick: the slope was capped at one level per tick).
+  return cursor_.length(z, k);
+}
+
+void StepGenerator::skip_empty_intervals(int64_t most) {
+  // A run of 0-long intervals after this one: their levels all come at this tick, passed
+  // at once (up to `most` levels, where the ramp ends or holds).
+  if (interval_end_ != t_ || most <= 0) return;
+  const int64_t m = std::min(cursor_.zeros_after(), most);
+  cursor_.skip_zeros(m);
+  interval_index_ += m;
+  level_ += phase_ == MotionPhase::Accelerating ? m : -m;
 }
 
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
@@ -61,7 +72,15 @@ std::optional<int64_t> StepGenerator::remaining() const {
 
 bool StepGenerator::decel_needed() const {
   // Steps the deceleration ramp yields from here: the phase it adds plus what is already
-  // accumulated, in whole steps.
+  // accumulated, in whole steps. Far from the turn (every step but the last few of a ramp
+  // up) an estimate in doubles decides; near it, the exact 128-bit phase.
+  const double left = static_cast<double>(*remaining()) * static_cast<double>(ramp_.phase_per_step);
+  const double span = static_cast<double>(level_ - ramp_.base_level);
+  const double sum = span * static_cast<double>(level_ + ramp_.base_level + 1) / 2;
+  const Rational z = ramp_.decel_ticks_per_level;
+  const double estimate =
+      sum * static_cast<double>(z.num) / static_cast<double>(z.den) + static_cast<double>(acc_);
+  if (left > estimate * (1 + 1e-9) + 2) return false;
   __int128 phase = ramp_.decel_phase(level_) + acc_;
   return static_cast<__int128>(*remaining()) * ramp_.phase_per_step <= phase;
 }
@@ -106,6 +125,7 @@ void StepGenerator::end_interval() {
     ++level_;
     ++interval_index_;
     interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, interval_index_);
+    skip_empty_intervals(peak_level_ - level_);
     return;
   }
   // Decelerating: to a lower running velocity, or to base.
@@ -137,11 +157,19 @@ void StepGenerator::end_interval() {
   --level_;
   ++interval_index_;
   interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, interval_index_);
+  const int64_t floor =
+      std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
+  skip_empty_intervals(level_ - floor);
 }
 
 bool StepGenerator::next(Step& out) {
+  if (scurve_) {
+    peeked_ = kUnpeeked;  // the next step may move
+    return s_next(out);
+  }
+  // A peek() that walked plain ramp intervals left where it got to: start from there.
+  if (ahead_.valid && peeked_ != kUnpeeked) ahead_.restore(*this);
   peeked_ = kUnpeeked;  // the next step may move
-  if (scurve_) return s_next(out);
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
     // Read each turn: reaching a velocity may move the motion to another grid (adopt).
@@ -149,14 +177,17 @@ bool StepGenerator::next(Step& out) {
     // The invariants every front end's input must keep (checked in the sanitizer build): a
     // moving level (the next step's time divides by it) and a phase inside one step.
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
-    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-    if (ramping && t_ + need > interval_end_) {
-      acc_ += level_ * (interval_end_ - t_);  // stays below d: no step in this stretch
+    // A ramp interval whose whole phase stays below d has no step (the same test as the
+    // ticks the step needs against the interval's end, without the division; level times
+    // an interval's length is of the order of the ramp's ticks, far inside int64).
+    if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
+      acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
       continue;
     }
+    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
     if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
       acc_ += level_ * (decel_tick_ - t_);
       t_ = decel_tick_;
@@ -190,12 +221,15 @@ std::optional<Tick> StepGenerator::peek() {
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
   if (peeked_ == kUnpeeked && phase_ != MotionPhase::Idle) {
-    // Most steps fall inside a ramp interval or a run: the step next() takes, without a copy.
-    const int64_t d = ramp_.phase_per_step;
-    const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
-    const bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-    const bool decel_first = phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_;
-    if (!(ramping && at > interval_end_) && !decel_first) peeked_ = at;
+    if (phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating) {
+      peeked_ = peek_plain();
+    } else {
+      // A run or a creep: the step next() takes, unless the deceleration point comes first.
+      ahead_.valid = false;
+      const int64_t d = ramp_.phase_per_step;
+      const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+      if (!(phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_)) peeked_ = at;
+    }
   }
   if (peeked_ == kUnpeeked) {
     StepGenerator copy = *this;
@@ -203,6 +237,46 @@ std::optional<Tick> StepGenerator::peek() {
     peeked_ = copy.next(s) ? s.time : kNoStep;
   }
   return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
+}
+
+Tick StepGenerator::peek_plain() {
+  // In a ramp, most steps fall in an interval reached by plain level changes (one up or
+  // down, the phase unchanged): the step next() takes, found without copying the
+  // generator. Anything else first (the ramp's end, its top): kUnpeeked.
+  ahead_.valid = false;
+  const int64_t d = ramp_.phase_per_step;
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
+  // end_interval()'s cases other than one level up or down begin at this level: the ramp's
+  // top, or the level a ramp down ends or holds at.
+  const int64_t last =
+      up ? peak_level_
+         : std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
+  const int64_t dir = up ? 1 : -1;
+  const int64_t plain = up ? last - level_ : level_ - last;  // level changes before `last`
+  int64_t level = level_, left = d - acc_, passed = 0;       // left: phase still to come
+  Tick t = t_, end = interval_end_;
+  IntervalCursor cursor = cursor_;
+  // level * length stays far inside int64 where no step falls: below one step's phase.
+  for (int64_t phase; (phase = level * (end - t)) < left;) {
+    if (passed >= plain) return kUnpeeked;
+    left -= phase;
+    t = end;
+    level += dir;
+    ++passed;
+    const Tick len = cursor.next_length();
+    if (len == 0) return kUnpeeked;  // levels at one tick: next() passes them at once
+    end = t + len;
+  }
+  // next() goes on from there.
+  if (passed > 0) ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
+  return t + (left + level - 1) / level;
+}
+
+void StepGenerator::Ahead::restore(StepGenerator& g) const {
+  g.t_ = t, g.acc_ = acc, g.level_ = level;
+  g.interval_index_ = index, g.interval_end_ = end, g.cursor_ = cursor;
 }
 
 void StepGenerator::advance_to(Tick at) {

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "node/motion/ramp.hpp"
+#include "node/motion/ramp_intervals.hpp"
 #include "node/motion/s_curve.hpp"
 #include "node/motion/timebase.hpp"
 
@@ -91,8 +92,10 @@ class StepGenerator {
   void reached_velocity();
   void advance_to(Tick at);
   void end_interval();
-  Tick interval_length(Rational z, int64_t index) const;
+  Tick interval_length(Rational z, int64_t index);
+  void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
+  Tick peek_plain();
   void plan_decel();
   void count_step();
   // The jerk-limited profile (ramp.s_curve): step_generator_s_curve.cpp.
@@ -117,6 +120,17 @@ class StepGenerator {
   int64_t level_ = 0;
   Tick interval_end_ = 0;  // end of the current ramp interval
   int64_t interval_index_ = 0;
+  IntervalCursor cursor_;  // the interval lengths, walked without divisions
+  // Where peek() got to through plain level changes, for next() to go on from.
+  struct Ahead {
+    bool valid = false;
+    Tick t = 0;
+    int64_t acc = 0, level = 0, index = 0;
+    Tick end = 0;
+    IntervalCursor cursor;
+    void restore(StepGenerator& g) const;
+  };
+  Ahead ahead_;
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_

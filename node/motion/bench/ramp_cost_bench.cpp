@@ -1,0 +1,92 @@
+// Instructions per step of each ramp the pulse engine runs (issue 13), a bench program for
+// callgrind: it runs `moves` moves of one kind through StepGenerator (peek, then next, as
+// AxisCore does) inside run_moves(), and prints the steps it took.
+//   valgrind --tool=callgrind --toggle-collect='*run_moves*'
+//   build/node/ramp_cost_bench <kind> [moves] [ramps]
+// then Ir (the "Collected" total) / steps. `ramps` stops each move as soon as it runs at its
+// velocity (a jog stopped at the top: the ramps alone, no cruise).
+// Kinds (one trapezoid for the last three: 0 -> 10,000 steps/s at 100,000 steps/s^2, 20,000
+// steps, so the ramps are 500 steps each way):
+//   horner  SPM30 %AQ3..7 = 20 1 8191 100 0 (245,730 steps/s, 100 ms ramps), 40,000 steps
+//   hp      HP 44714A PROFILE FREQ 0 10000 100000 (Hz, Hz/s), MOVE 20000
+//   cia402  CiA 402 PP: 6081h 10,000, 6083h = 6084h 100,000, 6086h = 0
+//   scurve  the same with 6086h = 3 and every 60A4h jerk 1,000,000 steps/s^3
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "node/motion/hp_profile.hpp"
+#include "node/motion/ramp.hpp"
+#include "node/motion/step_generator.hpp"
+
+namespace {
+
+using namespace stepnode::motion;
+
+struct Kind {
+  RampSpec ramp;
+  int64_t steps = 0;
+};
+
+bool kind_of(const char* name, Kind& k) {
+  if (std::strcmp(name, "horner") == 0) {
+    k = {horner_ramp(20, 1, 8191, 100, 0), 40'000};
+  } else if (std::strcmp(name, "hp") == 0) {
+    hp::Profile p;
+    p.min = 0, p.max = 10'000, p.slope = 100'000, p.last = 50e-6;
+    k = {hp::freq_ramp(p, p.max), 20'000};
+  } else if (std::strcmp(name, "cia402") == 0 || std::strcmp(name, "scurve") == 0) {
+    k = {profile_ramp(10'000, 100'000, 100'000, profile_levels_per_hz(100'000)), 20'000};
+    if (name[0] == 's') {
+      k.ramp.s_curve = true;
+      for (uint32_t& j : k.ramp.jerk) j = 1'000'000;
+    }
+  } else {
+    return false;
+  }
+  return true;
+}
+
+struct Totals {
+  int64_t steps = 0;
+  Tick checksum = 0;
+};
+
+// Not inlined: callgrind's --toggle-collect names it.
+[[gnu::noinline]] Totals run_moves(const Kind& k, int moves, bool ramps_only) {
+  StepGenerator g;
+  Totals out;
+  Tick t = 0;
+  for (int m = 0; m < moves; ++m) {
+    g.start(k.ramp, t, m % 2 ? -1 : +1, k.steps);
+    Step s;
+    bool stopped = false;
+    while (g.peek() && g.next(s)) {
+      ++out.steps;
+      out.checksum += s.time;
+      t = s.time;
+      if (ramps_only && !stopped && g.phase() == MotionPhase::Running) {
+        g.stop(s.time);
+        stopped = true;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Kind k;
+  if (argc < 2 || !kind_of(argv[1], k)) {
+    std::fprintf(stderr, "usage: ramp_cost_bench horner|hp|cia402|scurve [moves] [ramps]\n");
+    return 2;
+  }
+  const int moves = argc > 2 ? std::atoi(argv[2]) : 20;
+  const bool ramps_only = argc > 3 && std::strcmp(argv[3], "ramps") == 0;
+  const Totals t = run_moves(k, moves, ramps_only);
+  std::printf("%s: %lld steps in %d moves%s (checksum %lld)\n", argv[1],
+              static_cast<long long>(t.steps), moves, ramps_only ? ", ramps only" : "",
+              static_cast<long long>(t.checksum % 1'000'003));
+  return 0;
+}
