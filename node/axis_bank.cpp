@@ -72,8 +72,9 @@ uint64_t AxisBank::core_deadline_us(motion::AxisCore& core, uint64_t now_us) {
     return earliest(next, at(ahead.marks().end));
   }
   // A job waiting for an input (a move toward an active limit): the input changes with a
-  // frame, which advances the axes. A job whose motion ended is over at the next advance.
-  return core.waiting() ? next : earliest(next, now_us + 1);
+  // frame, which advances the axes. A job whose motion ended without its owner told (a wait
+  // ended in a frame) is over at the next advance: the conservative poll, as before.
+  return core.waiting() ? next : earliest(next, poll_deadline(now_us));
 }
 
 void AxisBank::power_up(uint64_t now_us) {
