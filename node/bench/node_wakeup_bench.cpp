@@ -84,6 +84,9 @@ void start_drives(od::Dictionary& od, bool move) {
     for (uint16_t cw : {0x0006, 0x0007, 0x000F})
       write(od, index(a, kControlword), 0, od::encode<uint16_t>(cw));
     if (!move) continue;
+    // No limit switches: the move runs for the whole run, as the jogs do.
+    write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
+    write(od, sim::obj::index(a, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
     write(od, index(a, kMaxProfileVelocity), 0, od::encode<uint32_t>(81'910));
     write(od, index(a, kProfileVelocity), 0, od::encode<uint32_t>(81'910));
     write(od, index(a, kProfileAcceleration), 0, od::encode<uint32_t>(1'000'000));
