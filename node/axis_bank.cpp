@@ -23,6 +23,12 @@ AxisBank::AxisBank(const DeviceLayout& layout) {
   }
 }
 
+uint64_t AxisBank::micros_at_or_after(motion::Tick t) const {
+  // The first microsecond whose ticks() reaches t: ceil(t * 625 / 3072).
+  const uint64_t u = t > 0 ? static_cast<uint64_t>(t) : 0;
+  return epoch_us_ + u / 3072 * 625 + (u % 3072 * 625 + 3071) / 3072;
+}
+
 motion::Tick AxisBank::ticks(uint64_t now_us) const {
   // 4.9152 ticks per microsecond = 3072/625, exact in integers.
   uint64_t since = now_us >= epoch_us_ ? now_us - epoch_us_ : 0;
@@ -41,14 +47,34 @@ void AxisBank::advance(uint64_t now_us) {
 uint64_t AxisBank::next_deadline_us(uint64_t now_us) {
   uint64_t next = kNoDeadline;
   for (auto& c : cores_) {
-    // An idle core waits for a command or an input edge: both come with a frame.
+    // An idle core waits for a command or an input edge: both come with a frame (a write
+    // of the simulated machine's switches advances the axes at once).
     motion::AxisCore& core = *c;
-    if (!core.busy()) continue;
-    const std::optional<motion::Tick> step = core.next_step_time();
-    next = earliest(next,
-                    step ? std::max(micros(*step), now_us + step_wake_us_) : poll_deadline(now_us));
+    if (core.busy()) next = earliest(next, core_deadline_us(core, now_us));
   }
   return next;
+}
+
+uint64_t AxisBank::core_deadline_us(motion::AxisCore& core, uint64_t now_us) {
+  const auto at = [&](motion::Tick t) { return std::max(micros_at_or_after(t), now_us + 1); };
+  uint64_t next = kNoDeadline;
+  // A time between steps at which the job changes course (FIND HOME's dwell): exact.
+  if (const motion::FrontEnd* owner = core.owner())
+    if (const std::optional<motion::Tick> d = owner->deadline()) next = at(*d);
+  if (const std::optional<motion::Tick> step = core.next_step_time())
+    return earliest(next, std::max(at(*step), now_us + step_wake_us_));
+  if (core.moving()) {
+    // No step left, but the ramp ends between steps (a stop at base velocity): the core
+    // goes idle, and the owner learns of it, at the end the generator computes.
+    motion::StepGenerator ahead = core.generator();
+    motion::Step none;
+    ahead.next(none);
+    return earliest(next, at(ahead.marks().end));
+  }
+  // A job waiting for an input (a move toward an active limit): the input changes with a
+  // frame, which advances the axes. A job whose motion ended without its owner told (a wait
+  // ended in a frame) is over at the next advance: the conservative poll, as before.
+  return core.waiting() ? next : earliest(next, poll_deadline(now_us));
 }
 
 void AxisBank::power_up(uint64_t now_us) {

@@ -30,8 +30,10 @@ class AxisBank {
   // When an axis next needs an advance (absolute us; kNoDeadline: every axis idle). A
   // moving axis: its next step, but at most once per step wake period (the poll period,
   // or half the step port's horizon if longer: the planner has queued the steps up to
-  // the horizon at the last advance, so the port never runs dry). A job without a next
-  // step (a wait, its end, a limit released): the conservative poll.
+  // the horizon at the last advance, so the port never runs dry; README "Running a node"
+  // says why horizon 0 keeps the poll period). A job's deadline between steps (FIND
+  // HOME's dwell) and the end of a ramp that ends between steps: exactly then. A job
+  // waiting for an input: nothing (the input comes with a frame).
   uint64_t next_deadline_us(uint64_t now_us);
 
   unsigned count() const { return static_cast<unsigned>(axes_.size()); }
@@ -43,6 +45,8 @@ class AxisBank {
   motion::Tick now() const { return ticks(now_us_); }
   motion::Tick ticks(uint64_t now_us) const;
   // The node clock's microsecond of a tick, to the nearest (so micros(ticks(us)) == us).
+  // The first node microsecond at which ticks() reaches t (a deadline is never early).
+  uint64_t micros_at_or_after(motion::Tick t) const;
   uint64_t micros(motion::Tick t) const {
     uint64_t u = static_cast<uint64_t>(t);
     return epoch_us_ + u / 3072 * 625 + (u % 3072 * 625 + 1536) / 3072;
@@ -53,6 +57,8 @@ class AxisBank {
   void listen(EventListener listener) { listeners_.push_back(std::move(listener)); }
 
  private:
+  uint64_t core_deadline_us(motion::AxisCore& core, uint64_t now_us);
+
   sim::Machine machine_;
   std::vector<std::unique_ptr<motion::AxisCore>> cores_;
   std::vector<std::unique_ptr<motion::Axis>> axes_;

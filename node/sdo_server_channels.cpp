@@ -44,9 +44,12 @@ void SdoServerChannels::on_tick(uint64_t now_us) {
 
 uint64_t SdoServerChannels::next_deadline_us(uint64_t now_us) const {
   if (changed_) return now_us;
+  uint64_t next = kNoDeadline;
   for (const Channel& ch : channels_)
-    if (ch.ids.valid && ch.server->busy()) return poll_deadline(now_us);
-  return kNoDeadline;
+    if (ch.ids.valid)
+      if (const std::optional<uint64_t> at = ch.server->next_deadline_us())
+        next = earliest(next, *at);
+  return next;
 }
 
 void SdoServerChannels::reset() {

@@ -28,9 +28,9 @@ class SdoServerChannels {
   bool on_frame(const od::CanFrame& frame, uint64_t now_us);
   // Server-side timeouts of every channel.
   void on_tick(uint64_t now_us);
-  // A transfer in progress times out in on_tick (SDO protocol timed out, 0x05040000); the
-  // server keeps its timer to itself (od/sdo_server), so while one runs this is the
-  // conservative poll deadline, the timeout found to within a poll period as before.
+  // A transfer in progress times out in on_tick (SDO protocol timed out, 0x05040000): the
+  // earliest channel's timeout instant (its client's last frame + the SDO timeout), or a
+  // block download's stalled sub-block acknowledgement (half the timeout) before it.
   // kNoDeadline with every channel idle.
   uint64_t next_deadline_us(uint64_t now_us) const;
   // Drops every transfer in progress, without a frame (NMT states without SDO, resets).

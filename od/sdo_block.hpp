@@ -4,6 +4,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "od/can_frame.hpp"
@@ -58,6 +59,12 @@ class BlockReceiver {
   // Sub-block timer: segments came since the last ack but the sub-block stalled (its
   // first or last segment lost) for `stall_us`; ack what arrived so the sender repeats.
   void on_tick(uint64_t now_us, uint64_t stall_us, uint32_t ack_cob_id, std::vector<CanFrame>& out);
+  // When on_tick would acknowledge a stalled sub-block (the last segment + `stall_us`);
+  // nothing while no segment came since the last ack.
+  std::optional<uint64_t> stall_deadline_us(uint64_t stall_us) const {
+    if (finished_ || !activity_) return std::nullopt;
+    return last_rx_us_ + stall_us;
+  }
   // The segment with the c bit arrived and was acknowledged: the end phase follows.
   bool finished() const { return finished_; }
   // End phase: drops the n padding bytes of the last segment. False if n is impossible.

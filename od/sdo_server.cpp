@@ -107,6 +107,16 @@ void SdoServer::reset() { state_->end(); }
 
 bool SdoServer::busy() const { return state_->t.phase != Phase::Idle; }
 
+std::optional<uint64_t> SdoServer::next_deadline_us() const {
+  const Transfer& t = state_->t;
+  if (t.phase == Phase::Idle) return std::nullopt;
+  // tick() aborts once elapsed >= timeout: the first instant is exactly last + timeout.
+  const uint64_t timeout = t.last_rx_us + timeout_us_;
+  if (t.phase != Phase::BlockDownloadSub) return timeout;
+  const std::optional<uint64_t> stall = t.receiver.stall_deadline_us(timeout_us_ / 2);
+  return stall ? std::min(*stall, timeout) : timeout;
+}
+
 void SdoServer::State::request(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out) {
   if (req.rtr) return;  // SDOs are never remote frames (7.2.4.3.1): nothing to answer
   if (req.dlc >= 1 && req.data[0] == kAbortByte) {

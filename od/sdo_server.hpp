@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "od/can_frame.hpp"
@@ -24,6 +25,10 @@ class SdoServer {
   void reset();
 
   bool busy() const;
+  // When on_tick next has work (issue 13, event-driven timing): the transfer's timeout
+  // instant (the client's last frame + the timeout) or, in a block download, the stalled
+  // sub-block's acknowledgement before it. Nothing while idle.
+  std::optional<uint64_t> next_deadline_us() const;
   void set_tx_cob_id(uint32_t cob_id) { tx_cob_id_ = cob_id; }
   void set_timeout_us(uint64_t timeout_us) { timeout_us_ = timeout_us; }
   // Largest block size (segments per sub-block, 1..127) offered in block download.

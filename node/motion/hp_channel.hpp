@@ -63,6 +63,11 @@ class Channel final : public FrontEnd, public AxisListener {
   void set_test_jumper(bool set) { test_jumper_ = set; }
   // Starts what is due (DELAY, STANDBY AUTO power-off) and brings the axis to `now`.
   void advance_to(Tick now);
+  // The earliest tick at which advance_to has timed work of the channel's own (issue 13):
+  // a DELAY's end, a WIDTH-mode ramp reaching its width, STANDBY AUTO's power-off. The
+  // job's steps are the core's (AxisCore::next_step_time); a trigger comes with a frame.
+  // `now`: the latest advance.
+  std::optional<Tick> next_event(Tick now) const;
 
   // ---- what the master reads
   Done done() const;
@@ -150,6 +155,9 @@ class Channel final : public FrontEnd, public AxisListener {
   void start_job(const RampSpec& ramp, int direction, std::optional<int64_t> steps, Tick at);
   void check_sustain_reached(Tick at);
   void width_advance(Tick now);
+  std::optional<Tick> width_reach() const;  // when a WIDTH-mode ramp reaches its target
+  // STANDBY AUTO's idle: no job of any front end, none of this channel's waiting to start.
+  bool standby_idle() const { return !core_.busy() && run_ == Run::Idle && !start_at_; }
   Tick delay_ticks() const;
 
   AxisCore& core_;

@@ -170,7 +170,7 @@ void Channel::advance_to(Tick now) {
   if (standby_ == StandbyMode::On) powered_ = pulse_train();
   // STANDBY AUTO follows the axis, whichever front end moves it.
   if (standby_ == StandbyMode::Auto) {
-    if (core_.busy() || run_ != Run::Idle || start_at_) {
+    if (!standby_idle()) {
       powered_ = true;
       idle_since_.reset();
     } else if (powered_) {
@@ -179,6 +179,19 @@ void Channel::advance_to(Tick now) {
     }
   }
   if (blocking_ && !armed_ && !start_at_ && run_ == Run::Idle) blocking_ = false;
+}
+
+std::optional<Tick> Channel::next_event(Tick now) const {
+  std::optional<Tick> next = start_at_;
+  const auto sooner = [&next](std::optional<Tick> t) {
+    if (t && (!next || *t < *next)) next = t;
+  };
+  sooner(width_reach());
+  // The power-off timer runs from the advance that found the axis idle (advance_to); an
+  // axis that became idle since (a job aborted in a frame) starts it at the next advance.
+  if (standby_ == StandbyMode::Auto && powered_ && standby_idle())
+    sooner(idle_since_ ? *idle_since_ + kStandbyAutoOffTicks : now + 1);
+  return next;
 }
 
 }  // namespace stepnode::motion::hp

@@ -57,14 +57,19 @@ void Channel::replan_widths(Tick at) {
   if (core_.owned_by(*this) && core_.moving()) core_.regrid(at, core_.generator().ramp());
 }
 
-void Channel::width_advance(Tick now) {
+std::optional<Tick> Channel::width_reach() const {
   if (profile_.mode != ProfileMode::Width || (run_ != Run::Sustain && run_ != Run::SustainStopping))
-    return;
-  if (run_ == Run::Sustain && sustain_reached_) return;
+    return std::nullopt;
+  if (run_ == Run::Sustain && sustain_reached_) return std::nullopt;
   // The exact tick the width reaches its target.
   double span = std::fabs(width_target_ - width_from_);
-  Tick reach = width_since_ + (profile_.slope > 0 ? seconds_to_ticks(span / profile_.slope) : 0);
-  if (reach > now) return;
+  return width_since_ + (profile_.slope > 0 ? seconds_to_ticks(span / profile_.slope) : 0);
+}
+
+void Channel::width_advance(Tick now) {
+  const std::optional<Tick> at = width_reach();
+  if (!at || *at > now) return;
+  const Tick reach = *at;
   core_.advance_to(reach);
   if (run_ == Run::SustainStopping) {
     core_.halt(*this, reach);

@@ -269,6 +269,31 @@ void Drive::advanced(Tick now) {
   notify();
 }
 
+std::optional<Tick> Drive::next_event(Tick now) const {
+  std::optional<Tick> next;
+  const auto sooner = [&next](Tick t) {
+    if (!next || t < *next) next = t;
+  };
+  // As advanced() decides target reached: no set-point running, inside the window since.
+  if (!halted_ && !active_ && !core_.owned_by(*this) && in_window_since_) {
+    const Tick window =
+        static_cast<Tick>(parameters_.position_window_time_ms) * motion::kClockHz / 1000;
+    if (now - *in_window_since_ < window) sooner(*in_window_since_ + window);
+  }
+  if (following_error_since_ && !following_error_) {
+    const Tick timeout = Tick{parameters_.following_error_timeout_ms} * motion::kClockHz / 1000;
+    sooner(std::max(*following_error_since_ + timeout, now + 1));
+  }
+  return next;
+}
+
+bool Drive::interpolating_segment(Tick now) const {
+  const bool position_mode =
+      mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
+  return position_mode && machine_.operation_enabled() &&
+         parameters_.following_error_window != UINT32_MAX && now < seg_start_ + seg_ticks_;
+}
+
 void Drive::notify() {
   const uint16_t s = statusword();
   if (s == last_status_) return;

@@ -112,6 +112,14 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void connection_restored() { connection_lost_ = false; }
   // Time passes: the position window time (6068h) runs out between steps.
   void advance(motion::Tick now);
+  // The earliest tick after `now` (the latest advance) at which advance() changes what the
+  // master sees without a step or a frame (issue 13): the position window time (6068h)
+  // or the following error time-out (6066h) running out. The motion's steps and its end
+  // are the core's. Nothing: no timed work.
+  std::optional<motion::Tick> next_event(motion::Tick now) const;
+  // CSP or IP interpolating a segment with a following error window: the demand (6062h)
+  // moves at every tick, between steps too, so the error may leave the window at any tick.
+  bool interpolating_segment(motion::Tick now) const;
   // A SYNC that arrived on the bus at `arrival` and is handled at `now` (CSP, CSV, IP: the
   // set-point written for this cycle takes effect; drive_cyclic.cpp).
   void sync(motion::Tick now, motion::Tick arrival);

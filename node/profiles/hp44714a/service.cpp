@@ -314,19 +314,15 @@ void HpService::publish(unsigned a) {
 }
 
 uint64_t HpService::next_advance_us(uint64_t now_us) {
-  for (unsigned a = 0; a < channels_.size(); ++a) {
-    const motion::hp::Channel& ch = *channels_[a];
-    const motion::AxisCore& core = axes_.core(a);
-    // Another front end's job (a Horner move): its steps are the axes' deadlines; STANDBY
-    // AUTO keeps the motor powered throughout and starts its power-off timer at the end.
-    if (core.busy() && !core.owned_by(ch)) continue;
-    const motion::hp::Done d = ch.done();
-    const bool auto_off_due =
-        ch.standby_mode() == motion::hp::StandbyMode::Auto && ch.motor_powered();
-    if (d == motion::hp::Done::Running || d == motion::hp::Done::SustainRunning || auto_off_due)
-      return poll_deadline(now_us);
-  }
-  return kNoDeadline;
+  uint64_t next = kNoDeadline;
+  // The job's steps (and a Horner job's) are the axes' deadlines (AxisBank); what is left is
+  // each channel's own timed work: a DELAY's end, a WIDTH ramp reaching its width, STANDBY
+  // AUTO's power-off. A job waiting for its trigger waits for a frame (TRIGGER, a SYNC, or
+  // channel 0's trigger, which fans out in the same advance).
+  for (const auto& ch : channels_)
+    if (const std::optional<motion::Tick> at = ch->next_event(now()))
+      next = earliest(next, std::max(axes_.micros_at_or_after(*at), now_us + 1));
+  return next;
 }
 
 void HpService::advance(uint64_t) {
