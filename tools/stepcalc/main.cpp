@@ -5,11 +5,11 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <stdexcept>
 
 #include "tools/stepcalc/arguments.hpp"
+#include "tools/stepcalc/cia402_command.hpp"
 #include "tools/stepcalc/png_export.hpp"
 #include "tools/stepcalc/profile_report.hpp"
 #include "tools/stepcalc/svg_plot.hpp"
@@ -18,12 +18,9 @@ using namespace stepnode;
 
 namespace {
 
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() > suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 int run(int argc, char** argv) {
+  // `stepcalc cia402 ...`: a CiA 402 move instead of the Horner registers.
+  if (argc > 1 && std::string(argv[1]) == "cia402") return tools::run_cia402(argc - 1, argv + 1);
   CLI::App app{
       "stepcalc: the Horner STPCALC profile calculator (SPM30 Appendix B), with the pulse\n"
       "engine's exact values for the same move beside STPCALC's."};
@@ -62,7 +59,7 @@ int run(int argc, char** argv) {
                  e.what());
     return 2;
   }
-  if (!plot.empty() && !ends_with(plot, ".svg") && !ends_with(plot, ".png")) {
+  if (!plot.empty() && !tools::plot_path_ok(plot)) {
     std::fprintf(stderr, "stepcalc: --plot '%s' must name a .svg or .png file\n", plot.c_str());
     return 2;
   }
@@ -75,16 +72,8 @@ int run(int argc, char** argv) {
   }
   std::cout << (json ? tools::report_json(report) : tools::report_text(report));
   if (plot.empty()) return 0;
-  std::string svg = tools::render_svg(report);
   try {
-    if (ends_with(plot, ".png")) {
-      tools::write_png(svg, plot);
-    } else {
-      std::ofstream out(plot, std::ios::binary);
-      out << svg;
-      out.close();
-      if (!out) throw std::runtime_error("cannot write " + plot);
-    }
+    tools::write_plot(tools::render_svg(report), plot);
   } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "stepcalc: %s\n", e.what());
     return 1;

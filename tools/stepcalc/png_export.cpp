@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <fstream>
 #include <stdexcept>
 
 // environ: declared by <unistd.h> (glibc, _GNU_SOURCE as g++ defines it).
@@ -54,6 +55,25 @@ void write_png(const std::string& svg, const std::string& png_path) {
   }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || done < svg.size())
     throw std::runtime_error("rsvg-convert could not write " + png_path);
+}
+
+namespace {
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() > suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+}  // namespace
+
+bool plot_path_ok(const std::string& path) {
+  return ends_with(path, ".svg") || ends_with(path, ".png");
+}
+
+void write_plot(const std::string& svg, const std::string& path) {
+  if (ends_with(path, ".png")) return write_png(svg, path);
+  std::ofstream out(path, std::ios::binary);
+  out << svg;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace stepnode::tools

@@ -77,9 +77,9 @@ struct Svg {
 };
 
 // Both curves fit, with a little room above and to the right.
-Frame frame_of(const ProfileReport& r) {
+Frame frame_of(const PlotSpec& p) {
   Frame f{0, 0};
-  for (const Curve* c : {&r.ideal_curve, &r.engine_curve})
+  for (const Curve* c : {&p.reference, &p.engine})
     for (auto [t, v] : *c) f.tmax = std::max(f.tmax, t), f.vmax = std::max(f.vmax, v);
   f.tmax = f.tmax > 0 ? f.tmax * 1.02 : 1.0;
   f.vmax = f.vmax > 0 ? f.vmax * 1.08 : 1.0;
@@ -87,32 +87,40 @@ Frame frame_of(const ProfileReport& r) {
 }
 
 // The XML header, the title (the inputs), the background and the heading.
-void put_heading(Svg& svg, const ProfileReport& r) {
+void put_heading(Svg& svg, const PlotSpec& p) {
   svg.put(
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" viewBox=\"0 0 %.0f "
       "%.0f\" "
       "font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"12\">\n",
       kWidth, kHeight, kWidth, kHeight);
-  std::string total =
-      r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
-  svg.put("<title>stepcalc %s %lld %lld %lld %lld %lld</title>\n", total.c_str(),
-          static_cast<long long>(r.input.aq3), static_cast<long long>(r.input.aq4),
-          static_cast<long long>(r.input.aq5), static_cast<long long>(r.input.aq6),
-          static_cast<long long>(r.input.aq7));
+  svg.put("<title>%s</title>\n", p.title.c_str());
   svg.put("<rect x=\"0\" y=\"0\" width=\"%.0f\" height=\"%.0f\" fill=\"white\"/>\n", kWidth,
           kHeight);
-  svg.put(
-      "<text x=\"%.0f\" y=\"24\" font-size=\"15\">"
-      "Velocity profile: total %s, AQ3..AQ7 = %lld %lld %lld %lld %lld%s</text>\n",
-      kLeft, total.c_str(), static_cast<long long>(r.input.aq3),
-      static_cast<long long>(r.input.aq4), static_cast<long long>(r.input.aq5),
-      static_cast<long long>(r.input.aq6), static_cast<long long>(r.input.aq7),
-      r.triangular ? " (triangular)" : "");
+  svg.put("<text x=\"%.0f\" y=\"24\" font-size=\"15\">%s</text>\n", kLeft, p.heading.c_str());
+}
+
+// The Horner move's plot: STPCALC's outline against the engine's staircase.
+PlotSpec horner_plot(const ProfileReport& r) {
+  PlotSpec p;
+  const std::string total =
+      r.input.total ? std::to_string(*r.input.total) : std::string("- (no destination)");
+  const std::string aq = std::to_string(r.input.aq3) + " " + std::to_string(r.input.aq4) + " " +
+                         std::to_string(r.input.aq5) + " " + std::to_string(r.input.aq6) + " " +
+                         std::to_string(r.input.aq7);
+  p.title = "stepcalc " + total + " " + aq;
+  p.heading = "Velocity profile: total " + total + ", AQ3..AQ7 = " + aq +
+              (r.triangular ? " (triangular)" : "");
+  p.reference_id = "stpcalc";
+  p.reference_label = "STPCALC (Appendix B): straight ramps at Rate_A / Rate_D";
+  p.engine_label = "engine: quantised ramp, one level per Z_A / Z_D ticks";
+  p.reference = r.ideal_curve;
+  p.engine = r.engine_curve;
+  return p;
 }
 
 // Grid, axes, tick marks, tick labels and the axis titles.
-void put_axes(Svg& svg, const Frame& f) {
+void put_axes(Svg& svg, const Frame& f, const std::string& unit) {
   const double tstep = nice_step(f.tmax, 8), vstep = nice_step(f.vmax, 6);
   auto each_tick = [](double step, double max, auto fn) {
     for (int i = 0; i * step <= max * (1 + 1e-9); ++i) fn(i * step);
@@ -132,12 +140,12 @@ void put_axes(Svg& svg, const Frame& f) {
   svg.text((kX0 + kX1) / 2, kHeight - 14, "middle", "time (ms)");
   svg.put(
       "<text transform=\"translate(22 %.1f) rotate(-90)\" text-anchor=\"middle\">velocity "
-      "(pulses/s)</text>\n",
-      (kY0 + kY1) / 2);
+      "(%s)</text>\n",
+      (kY0 + kY1) / 2, unit.c_str());
 }
 
 // The two series, clipped to the plot area.
-void put_curves(Svg& svg, const ProfileReport& r, const Frame& f) {
+void put_curves(Svg& svg, const PlotSpec& p, const Frame& f) {
   svg.put(
       "<defs><clipPath id=\"plot-area\">"
       "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\"/></clipPath></defs>\n",
@@ -153,39 +161,40 @@ void put_curves(Svg& svg, const ProfileReport& r, const Frame& f) {
     }
     svg.s += "\"/>\n";
   };
-  polyline(r.engine_curve, "engine", "#1f77b4", "");
-  polyline(r.ideal_curve, "stpcalc", "#d62728", " stroke-dasharray=\"7 4\"");
+  polyline(p.engine, "engine", "#1f77b4", "");
+  polyline(p.reference, p.reference_id.c_str(), "#d62728", " stroke-dasharray=\"7 4\"");
 }
 
 // Legend, above the plot area so it never covers a curve.
-void put_legend(Svg& svg) {
+void put_legend(Svg& svg, const PlotSpec& p) {
   double lx = kLeft, ly = 50;
   svg.put(
       "<g id=\"legend\">"
       "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#d62728\" stroke-width=\"2\" "
       "stroke-dasharray=\"7 4\"/>"
-      "<text x=\"%.0f\" y=\"%.0f\">STPCALC (Appendix B): straight ramps at Rate_A / Rate_D</text>",
-      lx, ly, lx + 30, ly, lx + 36, ly + 4);
+      "<text x=\"%.0f\" y=\"%.0f\">%s</text>",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4, p.reference_label.c_str());
   lx += 400;
   svg.put(
       "<line x1=\"%.0f\" y1=\"%.0f\" x2=\"%.0f\" y2=\"%.0f\" stroke=\"#1f77b4\" "
       "stroke-width=\"2\"/>"
-      "<text x=\"%.0f\" y=\"%.0f\">engine: quantised ramp, one level per Z_A / Z_D "
-      "ticks</text></g>\n",
-      lx, ly, lx + 30, ly, lx + 36, ly + 4);
+      "<text x=\"%.0f\" y=\"%.0f\">%s</text></g>\n",
+      lx, ly, lx + 30, ly, lx + 36, ly + 4, p.engine_label.c_str());
 }
 
 }  // namespace
 
-std::string render_svg(const ProfileReport& r) {
-  const Frame f = frame_of(r);
+std::string render_svg(const PlotSpec& p) {
+  const Frame f = frame_of(p);
   Svg svg;
-  put_heading(svg, r);
-  put_axes(svg, f);
-  put_curves(svg, r, f);
-  put_legend(svg);
+  put_heading(svg, p);
+  put_axes(svg, f, p.velocity_unit);
+  put_curves(svg, p, f);
+  put_legend(svg, p);
   svg.s += "</svg>\n";
   return svg.s;
 }
+
+std::string render_svg(const ProfileReport& r) { return render_svg(horner_plot(r)); }
 
 }  // namespace stepnode::tools

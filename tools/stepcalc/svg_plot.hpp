@@ -12,4 +12,14 @@ namespace stepnode::tools {
 constexpr size_t kMaxPlotPoints = 4000;
 std::string render_svg(const ProfileReport& r);
 
+// Any two velocity curves in the same frame: the reference (dashed) and the engine's.
+struct PlotSpec {
+  std::string title;    // <title>
+  std::string heading;  // the line above the legend
+  std::string reference_id, reference_label, engine_label;
+  std::string velocity_unit = "pulses/s";
+  Curve reference, engine;
+};
+std::string render_svg(const PlotSpec& p);
+
 }  // namespace stepnode::tools

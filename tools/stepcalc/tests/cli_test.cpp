@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -105,6 +106,23 @@ TEST(StepcalcCli, PlotsPngWithRsvgConvertOrSaysWhatIsMissing) {
   EXPECT_EQ(std::string(magic + 1, 3), "PNG");
   EXPECT_GT(std::filesystem::file_size(path), 1000u);
   std::filesystem::remove(path);
+}
+
+TEST(StepcalcCli, Cia402MoveAndItsRefusals) {
+  CliRun ok = stepcalc(
+      "cia402 8000 --velocity 4000 --acceleration 5000 --profile-type 3 --jerk 10000 --json");
+  ASSERT_EQ(ok.status, 0) << ok.out;
+  auto j = nlohmann::json::parse(ok.out);
+  EXPECT_NEAR(j["closed_form"]["time_ms"].get<double>(), 3300.0, 1e-6);  // 1.3 + 0.7 + 1.3 s
+  EXPECT_EQ(j["deceleration"], 5000);                                    // 6084h defaults to 6083h
+  for (const char* args : {"cia402 0 --velocity 1 --acceleration 1", "cia402 10 --acceleration 1",
+                           "cia402 10 --velocity 1 --acceleration 1 --profile-type 2",
+                           "cia402 10 --velocity 1 --acceleration 1 --jerk 5 --jerks 1 2 3 4",
+                           "cia402 10 --velocity 1 --acceleration 1 --plot x.pdf"}) {
+    CliRun bad = stepcalc(args);
+    EXPECT_EQ(bad.status, 2) << args << ": " << bad.out;
+    EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << ": " << bad.out;
+  }
 }
 
 }  // namespace
