@@ -34,7 +34,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 import can
 import pytest
 
-from canopen_master import CanopenMaster, Emcy, decode_emcy
+from canopen_master import STATE_OPERATIONAL, CanopenMaster, Emcy, decode_emcy
 
 # python-canopen, canopen/profiles/p402.py: BaseNode402.TIMEOUT_SWITCH_STATE_SINGLE = 0.4 s
 STATE_TIMEOUT = float(os.environ.get("CIA402_STATE_TIMEOUT", "0.4"))
@@ -467,3 +467,17 @@ class Node402:
             pytest.fail(f"no EMCY 0x{code:04X} on 0x{0x80 + self.node_id:03X} within {timeout} s; EMCYs seen: "
                         f"{[(hex(e.error_code), e.manufacturer.hex()) for e in self.emcys[mark:]]}", pytrace=False)
         return found[0]
+
+
+def boot_drive(master: CanopenMaster, start_node, tmp_path, node_id: int) -> "Node402":
+    """A fresh one-axis CiA 402 node (config `profiles = ["cia402"]`), started by NMT and
+    confirmed OPERATIONAL by its heartbeat, its TPDOs of that moment read."""
+    path = tmp_path / "cia402.toml"
+    path.write_text('axes = 1\nprofiles = ["cia402"]\n')
+    start_node(node_id, ["--config", path])
+    node = Node402(master, node_id, (1,))
+    master.nmt_start(node_id)
+    if master.wait_heartbeat(node_id, timeout=3.0, state=STATE_OPERATIONAL) != STATE_OPERATIONAL:
+        pytest.fail(f"node {node_id} did not confirm NMT operational")
+    node.pump(0.3)  # TPDOs sent on entering operational
+    return node

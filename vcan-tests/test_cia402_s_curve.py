@@ -27,9 +27,9 @@ from typing import List, Sequence, Tuple
 
 import pytest
 
-from canopen_master import ABORT_NO_SUBINDEX, ABORT_VALUE_RANGE, STATE_OPERATIONAL, abort_of
+from canopen_master import ABORT_NO_SUBINDEX, ABORT_VALUE_RANGE, abort_of
 from cia402_master import (
-    MODE_PP, MODE_PV, OPERATION_ENABLED, POSITION_ACTUAL, SW_SPEED_ZERO, SW_TARGET_REACHED, Node402,
+    MODE_PP, MODE_PV, OPERATION_ENABLED, POSITION_ACTUAL, SW_SPEED_ZERO, SW_TARGET_REACHED, Node402, boot_drive,
 )
 
 NODE = 44
@@ -131,15 +131,7 @@ def test_the_closed_form_itself():
 # ---------------------------------------------------------------- the drive
 
 def boot(master, start_node, tmp_path) -> Node402:
-    path = tmp_path / "cia402.toml"
-    path.write_text('axes = 1\nprofiles = ["cia402"]\n')
-    start_node(NODE, ["--config", path])
-    node = Node402(master, NODE, (1,))
-    master.nmt_start(NODE)
-    if master.wait_heartbeat(NODE, timeout=3.0, state=STATE_OPERATIONAL) != STATE_OPERATIONAL:
-        pytest.fail(f"node {NODE} did not confirm NMT operational")
-    node.pump(0.3)  # TPDOs sent on entering operational
-    return node
+    return boot_drive(master, start_node, tmp_path, NODE)
 
 
 def write_i16(drive, index, value, sub=0):

@@ -26,10 +26,9 @@ import time
 import pytest
 
 from axis_helpers import HeartbeatSender
-from canopen_master import STATE_OPERATIONAL
 from cia402_master import (
     CW_DISABLE_VOLTAGE, CW_QUICK_STOP, FAULT, FAULT_REACTION_ACTIVE, MODE_PV, QUICK_STOP_ACTIVE, STATUSWORD,
-    SWITCH_ON_DISABLED, Node402, state_sequence,
+    SWITCH_ON_DISABLED, Node402, boot_drive, state_sequence,
 )
 
 NODE = 42
@@ -42,15 +41,7 @@ RAMP_TOL = 100           # steps: 5 % of the ramp, for the TPDO sampling of the 
 
 
 def boot(master, start_node, tmp_path) -> Node402:
-    path = tmp_path / "cia402.toml"
-    path.write_text('axes = 1\nprofiles = ["cia402"]\n')
-    start_node(NODE, ["--config", path])
-    node = Node402(master, NODE, (1,))
-    master.nmt_start(NODE)
-    if master.wait_heartbeat(NODE, timeout=3.0, state=STATE_OPERATIONAL) != STATE_OPERATIONAL:
-        pytest.fail(f"node {NODE} did not confirm NMT operational")
-    node.pump(0.3)
-    return node
+    return boot_drive(master, start_node, tmp_path, NODE)
 
 
 def ramp_steps(velocity: float) -> float:

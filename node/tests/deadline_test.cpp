@@ -4,29 +4,12 @@
 
 #include "node/profiles/horner/objects.hpp"
 #include "node/profiles/sim/objects.hpp"
-#include "node/tests/node_harness.hpp"
+#include "node/tests/event_driven.hpp"
 
 namespace stepnode::node::test {
 namespace {
 
-class DeadlineTest : public NodeHarness {
- protected:
-  // Runs the node as node/main.cpp does: woken only at its earliest deadline (bounded by
-  // `bound_us`), up to `until`. Returns the number of wake-ups.
-  unsigned run_event_driven(uint64_t until, uint64_t bound_us = 10'000'000) {
-    unsigned wakeups = 0;
-    for (;;) {
-      const uint64_t next = std::min(device->next_deadline_us(t), t + bound_us);
-      EXPECT_GT(next, t) << "a deadline at or before now after a tick would spin the loop";
-      if (next > until || next <= t) break;
-      t = next;
-      device->on_tick(t);
-      ++wakeups;
-    }
-    t = until;
-    return wakeups;
-  }
-};
+class DeadlineTest : public EventDrivenHarness {};
 
 TEST_F(DeadlineTest, AnIdleNodeWithoutHeartbeatHasNoDeadline) {
   ASSERT_EQ(sdo_write(0x1017, 0, 0, 2), 0u);

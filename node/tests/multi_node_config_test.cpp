@@ -7,39 +7,14 @@
 #include <vector>
 
 #include "node/config.hpp"
-#include "node/tests/node_harness.hpp"
+#include "node/tests/command_line_test.hpp"
 
 namespace stepnode::node::test {
 namespace {
 
-class MultiNodeConfigTest : public ::testing::Test {
+class MultiNodeConfigTest : public CommandLineTest {
  protected:
-  NodeConfig parse(std::vector<std::string> args) {
-    std::vector<std::string> all{"stepnode", "--iface", "vcan0"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    bool exit_now = false;
-    int exit_code = 0;
-    return parse_command_line(static_cast<int>(argv.size()), argv.data(), exit_now, exit_code);
-  }
-  std::string error_of(std::vector<std::string> args) {
-    try {
-      parse(std::move(args));
-    } catch (const UsageError& e) {
-      std::string msg = e.what();
-      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-      return msg;
-    }
-    ADD_FAILURE() << "no UsageError";
-    return {};
-  }
-  std::string config(const std::string& text) {
-    auto p = dir.path / "c.toml";
-    std::ofstream(p) << text;
-    return p.string();
-  }
-  TempDir dir;
+  MultiNodeConfigTest() { base_args = {"--iface", "vcan0"}; }
 };
 
 TEST_F(MultiNodeConfigTest, ARangeOrAListGivesEveryNode) {

@@ -27,13 +27,16 @@ int run_cia402(int argc, char** argv) {
   std::string plot;
   auto u32 = CLI::Range(uint32_t{0}, UINT32_MAX);
   app.add_option("DISTANCE", m.distance, "steps to move (607Ah from 0), 1..2147483647")->required();
-  app.add_option("--velocity", m.velocity, "6081h profile velocity, steps/s")->required()->check(u32);
+  app.add_option("--velocity", m.velocity, "6081h profile velocity, steps/s")
+      ->required()
+      ->check(u32);
   app.add_option("--acceleration", m.acceleration, "6083h profile acceleration, steps/s^2")
       ->required()
       ->check(u32);
   app.add_option("--deceleration", deceleration, "6084h profile deceleration (default: 6083h)")
       ->check(u32);
-  app.add_option("--profile-type", m.profile_type, "6086h: 0 linear ramp (default), 3 jerk-limited");
+  app.add_option("--profile-type", m.profile_type,
+                 "6086h: 0 linear ramp (default), 3 jerk-limited");
   auto* one = app.add_option("--jerk", jerk, "60A4h:1..4 all this jerk, steps/s^3 (0: not limited)")
                   ->check(u32);
   app.add_option("--jerks", jerks,

@@ -98,7 +98,8 @@ std::optional<ClosedForm> closed_form(const Cia402Move& m) {
 // The engine's ticks of every step, as the CiA 402 drive starts a PP move (drive_pp.cpp).
 std::vector<Tick> engine_steps(const Cia402Move& m) {
   const int64_t v = m.velocity, acc = m.acceleration, dec = m.deceleration;
-  motion::RampSpec r = motion::profile_ramp(v, acc, dec, motion::profile_levels_per_hz(std::max(acc, dec)));
+  motion::RampSpec r =
+      motion::profile_ramp(v, acc, dec, motion::profile_levels_per_hz(std::max(acc, dec)));
   if (m.profile_type == kJerkLimitedRamp) {
     r.s_curve = true;
     std::copy(std::begin(m.jerk), std::end(m.jerk), std::begin(r.jerk));
@@ -170,11 +171,12 @@ std::string cia402_text(const Cia402Report& r) {
                 "CiA 402 profile position move of %lld steps: 6081h %u steps/s, 6083h %u and 6084h "
                 "%u steps/s^2, 6086h %d (%s)",
                 static_cast<long long>(m.distance), m.velocity, m.acceleration, m.deceleration,
-                m.profile_type, m.profile_type == kJerkLimitedRamp ? "jerk-limited" : "linear ramp");
+                m.profile_type,
+                m.profile_type == kJerkLimitedRamp ? "jerk-limited" : "linear ramp");
   out += buf;
   if (m.profile_type == kJerkLimitedRamp) {
-    std::snprintf(buf, sizeof buf, ", 60A4h %u %u %u %u steps/s^3", m.jerk[0], m.jerk[1],
-                  m.jerk[2], m.jerk[3]);
+    std::snprintf(buf, sizeof buf, ", 60A4h %u %u %u %u steps/s^3", m.jerk[0], m.jerk[1], m.jerk[2],
+                  m.jerk[3]);
     out += buf;
   }
   out += "\n";
@@ -189,12 +191,15 @@ std::string cia402_text(const Cia402Report& r) {
   row("peak velocity (steps/s)", r.closed_form_peak_velocity, r.peak_velocity);
   row("steps", static_cast<double>(m.distance), static_cast<double>(r.steps));
   if (r.max_step_deviation_us) {
-    std::snprintf(buf, sizeof buf,
-                  "  largest step time from the closed form's: %.3f us (one engine tick: %.3f us)\n",
-                  *r.max_step_deviation_us, 1e6 / kClockHz);
+    std::snprintf(
+        buf, sizeof buf,
+        "  largest step time from the closed form's: %.3f us (one engine tick: %.3f us)\n",
+        *r.max_step_deviation_us, 1e6 / kClockHz);
     out += buf;
   } else {
-    out += "  the move does not reach 6081h: no closed form (the planner peaks where both ramps fit)\n";
+    out +=
+        "  the move does not reach 6081h: no closed form (the planner peaks where both ramps "
+        "fit)\n";
   }
   return out;
 }

@@ -13,11 +13,11 @@
 namespace stepnode::tools {
 
 struct Cia402Move {
-  int64_t distance = 0;      // steps (> 0), 607Ah from standstill at 0
-  uint32_t velocity = 0;     // 6081h, steps/s
-  uint32_t acceleration = 0; // 6083h, steps/s^2
-  uint32_t deceleration = 0; // 6084h, steps/s^2
-  int16_t profile_type = 0;  // 6086h: 0 linear ramp, 3 jerk-limited ramp
+  int64_t distance = 0;       // steps (> 0), 607Ah from standstill at 0
+  uint32_t velocity = 0;      // 6081h, steps/s
+  uint32_t acceleration = 0;  // 6083h, steps/s^2
+  uint32_t deceleration = 0;  // 6084h, steps/s^2
+  int16_t profile_type = 0;   // 6086h: 0 linear ramp, 3 jerk-limited ramp
   // 60A4h:1..4 in steps/s^3: begin acceleration, begin deceleration, end acceleration, end
   // deceleration jerk (0: not limited).
   uint32_t jerk[4] = {0, 0, 0, 0};
@@ -25,9 +25,9 @@ struct Cia402Move {
 
 struct Cia402Report {
   Cia402Move move;
-  int64_t steps = 0;             // steps the engine made (the distance)
-  double engine_time_ms = 0;     // first tick to the last step
-  double peak_velocity = 0;      // the engine's fastest step rate, steps/s
+  int64_t steps = 0;          // steps the engine made (the distance)
+  double engine_time_ms = 0;  // first tick to the last step
+  double peak_velocity = 0;   // the engine's fastest step rate, steps/s
   // The closed form of the same profile (the move reaches 6081h; otherwise nullopt: the
   // closed form of a short jerk-limited move, whose peak the planner chooses, is not made).
   std::optional<double> closed_form_time_ms;

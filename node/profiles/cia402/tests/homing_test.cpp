@@ -43,6 +43,16 @@ class Homing : public DriveAxis {
     }
     for (int i = 0; i < seconds * 10 && homing_bits() == kInProgress; ++i) run_s(0.1);
   }
+  // Method `m`, mode 6, the master's enable sequence and the start edge (bit 4), nothing
+  // run yet.
+  void start(int8_t m) {
+    drive.parameters().homing_method = m;
+    drive.set_mode(Mode::Homing, now);
+    cw(0x06);
+    cw(0x07);
+    cw(0x0F);
+    cw(0x1F);
+  }
   void limits(std::optional<int64_t> low, std::optional<int64_t> high) {
     motor.config().lower_limit = low;
     motor.config().upper_limit = high;
@@ -164,14 +174,9 @@ TEST_F(Homing, AMethodThisDriveDoesNotPerformIsAHomingError) {
 
 TEST_F(Homing, HaltInterruptsTheHoming) {
   limits(-100'000, std::nullopt);
-  drive.parameters().homing_method = 17;
   drive.parameters().homing_switch_speed = 1000;
   drive.parameters().homing_acceleration = 10'000;
-  drive.set_mode(Mode::Homing, now);
-  cw(0x06);
-  cw(0x07);
-  cw(0x0F);
-  cw(0x1F);
+  start(17);
   run_s(0.5);
   EXPECT_EQ(homing_bits(), kInProgress);
   cw(0x011F);  // halt
@@ -253,25 +258,20 @@ TEST_F(HardStopHoming, ALimitSwitchBeforeTheHardStopIsAHomingError) {
 }
 
 TEST_F(HardStopHoming, WithoutAnEncoderOrAFollowingErrorWindowTheMethodIsRefused) {
-  auto start = [&] {
-    drive.parameters().homing_method = -17;
-    drive.set_mode(Mode::Homing, now);
-    cw(0x06);
-    cw(0x07);
-    cw(0x0F);
-    cw(0x1F);
+  auto start_and_wait = [&] {
+    start(-17);
     run_s(0.5);
   };
   motor.config().stall_below = -500;
   motor.config().encoder = sim::EncoderKind::None;
-  start();
+  start_and_wait();
   EXPECT_EQ(homing_bits(), kError | kNotStarted);  // error, velocity 0: at the start edge
   EXPECT_EQ(motor.position(), 0);                  // nothing moved
   reset();
   cw(0x0F);  // bit 4 low again
   motor.config().stall_below = -500;
   drive.parameters().following_error_window = UINT32_MAX;  // 6065h off
-  start();
+  start_and_wait();
   EXPECT_EQ(homing_bits(), kError | kNotStarted);
   EXPECT_EQ(motor.position(), 0);
 }
