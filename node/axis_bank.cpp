@@ -14,7 +14,7 @@ AxisBank::AxisBank(const DeviceLayout& layout) {
   for (unsigned a = 0; a < layout.axes; ++a) {
     std::vector<motion::MotorPort*> motors{&machine_.axes[a]};
     if (layout.spm30_multiplexed)
-      motors = {&machine_.axes[0], &machine_.axes[1], &machine_.axes[2]};
+      motors = {machine_.axes.data(), &machine_.axes[1], &machine_.axes[2]};  // SPM30: 3 motors
     cores_.push_back(std::make_unique<motion::AxisCore>(motors));
     axes_.push_back(std::make_unique<motion::Axis>(motion::AxisConfig{}, *cores_.back()));
     axes_.back()->on_event = [this, a](const motion::AxisEvent& e) {
@@ -55,7 +55,7 @@ uint64_t AxisBank::next_deadline_us(uint64_t now_us) {
   return next;
 }
 
-uint64_t AxisBank::core_deadline_us(motion::AxisCore& core, uint64_t now_us) {
+uint64_t AxisBank::core_deadline_us(motion::AxisCore& core, uint64_t now_us) const {
   const auto at = [&](motion::Tick t) { return std::max(micros_at_or_after(t), now_us + 1); };
   uint64_t next = kNoDeadline;
   // A time between steps at which the job changes course (FIND HOME's dwell): exact.

@@ -57,7 +57,7 @@ class AxisBank {
   void listen(EventListener listener) { listeners_.push_back(std::move(listener)); }
 
  private:
-  uint64_t core_deadline_us(motion::AxisCore& core, uint64_t now_us);
+  uint64_t core_deadline_us(motion::AxisCore& core, uint64_t now_us) const;
 
   sim::Machine machine_;
   std::vector<std::unique_ptr<motion::AxisCore>> cores_;

@@ -123,7 +123,7 @@ void CanopenNode::install_service_hooks() {
       return store_.forget(group.first, group.last) ? od::SdoAbort::None : od::SdoAbort::Hardware;
     });
   }
-  for (auto& [index, obj] : od.objects()) {
+  for (const auto& [index, obj] : od.objects()) {
     (void)obj;
     if (index >= 0x1400 && index <= 0x1BFF)
       for (auto& [sub, e] : od.object(index)->entries) od::listen(e, [this] { pdo_.mark_dirty(); });
@@ -135,7 +135,7 @@ void CanopenNode::install_service_hooks() {
   for (uint16_t index : {0x1005, 0x1006, 0x1019})
     od::listen(od.at(index, 0), [this] { sync_.reset(0); });
   // The objects whose values decide which CAN-IDs the node receives.
-  for (auto& [index, obj] : od.objects()) {
+  for (const auto& [index, obj] : od.objects()) {
     const bool filtered = index == 0x1005 || index == 0x1012 || index == 0x1014 ||
                           index == 0x1016 || (index >= 0x1200 && index <= 0x1203) ||
                           (index >= 0x1400 && index <= 0x17FF);
@@ -387,13 +387,10 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   consumer_.on_frame(frame, now_us);
   if (state_ == NmtState::Stopped || state_ == NmtState::Initialising) return;
 
-  if (sync_.on_frame(frame, now_us, arrival_us) || time_.on_frame(frame, now_us, arrival_us)) {
-    // handled
-  } else if (sdo_.on_frame(frame, now_us)) {
-    // handled by the SDO server channel it was addressed to
-  } else if (state_ == NmtState::Operational) {
-    pdo_.on_frame(frame, now_us, arrival_us);
-  }
+  // SYNC, TIME, then the SDO server channel the frame was addressed to; the rest may be a PDO.
+  const bool handled = sync_.on_frame(frame, now_us, arrival_us) ||
+                       time_.on_frame(frame, now_us, arrival_us) || sdo_.on_frame(frame, now_us);
+  if (!handled && state_ == NmtState::Operational) pdo_.on_frame(frame, now_us, arrival_us);
   // A received frame may change mapped values: event-driven TPDOs go out now, not on the
   // next tick.
   on_tick(now_us);

@@ -105,7 +105,7 @@ class CanopenNode {
   void adopt_node_id(uint8_t node_id);
   void on_lss_frame(const od::CanFrame& frame, uint64_t now_us);
   void load_parameters(uint16_t first, uint16_t last, uint64_t now_us);
-  void enter(NmtState state, uint64_t now_us);
+  void enter(NmtState next, uint64_t now_us);
   void handle_nmt(NmtCommand command, uint64_t now_us);
   // The application is told first, then 0x1029 says what happens to the NMT state.
   void communication_error(CommunicationError error, uint8_t node, uint64_t now_us);

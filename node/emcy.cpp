@@ -42,7 +42,7 @@ void EmcyProducer::enqueue(uint16_t code, std::array<uint8_t, 5> manufacturer, u
 
 void EmcyProducer::raise(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer,
                          uint64_t now_us) {
-  if (active_.count(code)) return;
+  if (active_.contains(code)) return;
   active_[code] = register_bits;
   update_register();
   push_history(code, manufacturer);

@@ -20,7 +20,7 @@ namespace {
 // With many nodes behind one socket a burst for all of them (a master's SDO round, NMT,
 // SYNC answers it provokes elsewhere) must queue, not overflow: a receive queue per node
 // of this much. One node keeps the kernel's default, as before issue 13.
-constexpr size_t kReceiveBufferPerNode = 8 * 1024;
+constexpr size_t kReceiveBufferPerNode = size_t{8} * 1024;
 
 // SocketCAN error frames in CANopen terms (linux/can/error.h).
 std::vector<BusEvent> bus_events(const canio::ReceivedFrame& r) {

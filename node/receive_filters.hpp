@@ -33,7 +33,7 @@ constexpr size_t kMaxReceiveFilters = 512;
 
 // Sorted, without duplicates. `node_id` lss::kUnconfigured: only LSS and NMT. Empty: no
 // filter (every frame), only for a list longer than kMaxReceiveFilters.
-std::vector<ReceiveFilter> receive_filters(const od::Dictionary& dictionary, uint8_t node_id,
+std::vector<ReceiveFilter> receive_filters(const od::Dictionary& od, uint8_t node_id,
                                            unsigned pdo_count);
 
 }  // namespace stepnode::node

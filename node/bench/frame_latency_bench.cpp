@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -81,7 +82,7 @@ struct Bench {
           ++frames_sent;
           if (f.id == watch_id && !answered_ns) answered_ns = clock_ns();
         }) {}
-  uint64_t now_us() const { return clock_ns() / 1000; }
+  static uint64_t now_us() { return clock_ns() / 1000; }
   void tick() { device.on_tick(now_us()); }
   void write(uint16_t index, uint8_t sub, od::Bytes v) {
     if (device.dictionary().write(index, sub, v) != od::SdoAbort::None) {
@@ -100,7 +101,7 @@ double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1,
-                    static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5))];
+                    static_cast<size_t>(std::llround(p * static_cast<double>(v.size() - 1))))];
 }
 
 // One timed frame: from the device being handed it to the watched answer leaving (or the

@@ -12,8 +12,8 @@ Axis::Axis(AxisConfig config, AxisCore& core) : config_(config), core_(core) {
   power_up(0);
 }
 
-Axis::Axis(AxisConfig config, std::vector<MotorPort*> motors)
-    : config_(config), own_core_(std::make_unique<AxisCore>(std::move(motors))), core_(*own_core_) {
+Axis::Axis(AxisConfig config, const std::vector<MotorPort*>& motors)
+    : config_(config), own_core_(std::make_unique<AxisCore>(motors)), core_(*own_core_) {
   saved_.resize(core_.motors());
   core_.listen(*this, this);
   set_config(config_);

@@ -63,7 +63,7 @@ class Axis final : public FrontEnd, public AxisListener {
   Axis(AxisConfig config, AxisCore& core);
   // On a core of its own: `motors` (one, or three for an SPM30 multiplexed axis; their
   // inputs include the e-stop).
-  Axis(AxisConfig config, std::vector<MotorPort*> motors);
+  Axis(AxisConfig config, const std::vector<MotorPort*>& motors);
   Axis(const Axis&) = delete;
   Axis& operator=(const Axis&) = delete;
 

@@ -14,7 +14,7 @@ class PositionCounter {
   void set_scale(double units_per_step, int64_t steps_now);
   double scale() const { return scale_; }
   // POS value: the current step count now reads `units`.
-  void load(double units, int64_t steps_now);
+  void load(double value, int64_t steps_now);
   // POS?
   double units(int64_t steps_now) const;
 

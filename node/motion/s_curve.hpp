@@ -69,7 +69,7 @@ class SCurve {
       return c0 + tau * (c1 + tau * (c2 + c3 * static_cast<__int128>(tau)));
     }
     __int128 slope(Tick tau) const {
-      return c1 + tau * (2 * c2 + 3 * c3 * static_cast<__int128>(tau));
+      return c1 + tau * (2 * c2 + 3 * static_cast<__int128>(c3) * tau);
     }
   };
   struct State {
@@ -85,8 +85,8 @@ class SCurve {
   void add_transition(Tick& t, State& s, double v1, double decel);
   void add_position_goal(Tick t, State s, int64_t distance, double vp);
   void add_open(Tick t, const State& s, Kind kind);
-  Tick find(const Segment& seg, Tick lo, __int128 target) const;
-  std::optional<Tick> compute(int& seg) const;
+  static Tick find(const Segment& g, Tick lo, __int128 target);
+  std::optional<Tick> compute(int& k) const;
 
   JerkLimits limits_;
   std::array<Segment, kMaxSegments> segs_{};

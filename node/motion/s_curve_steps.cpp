@@ -19,7 +19,7 @@ double approx(__int128 x) {
 
 }  // namespace
 
-Tick SCurve::find(const Segment& g, Tick lo, __int128 target) const {
+Tick SCurve::find(const Segment& g, Tick lo, __int128 target) {
   // The smallest tau in (lo, g.len] with g.at(tau) >= target, given g.at(lo) < target (the
   // position rises in a segment: its velocity is >= 0 throughout).
   const double r = approx(target - g.at(lo));

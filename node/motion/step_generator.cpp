@@ -366,7 +366,7 @@ void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSp
   // to it first at the same deceleration ends at the same place and time); a higher one
   // ramps up again.
   if (distance_ && phase_ == MotionPhase::Decelerating && !holding_ && level <= level_) return;
-  then_ = std::move(then);
+  then_ = then;
   if (level > level_) {
     // Intervals at level+1 .. target, Z_A each (the same convention as a start).
     peak_level_ = level;
@@ -416,9 +416,9 @@ void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
   leave_s_curve(at);
   advance_to(at);
   then_.reset();
-  const int64_t level =
+  const auto level = static_cast<int64_t>(
       (static_cast<__int128>(level_) * ramp.phase_per_step + ramp_.phase_per_step / 2) /
-      ramp_.phase_per_step;
+      ramp_.phase_per_step);
   adopt(ramp, level);
 }
 

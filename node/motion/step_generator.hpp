@@ -92,7 +92,7 @@ class StepGenerator {
   void reached_velocity();
   void advance_to(Tick at);
   void end_interval();
-  Tick interval_length(Rational z, int64_t index);
+  Tick interval_length(Rational z, int64_t k);
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
   Tick peek_plain();
@@ -104,7 +104,7 @@ class StepGenerator {
   void s_follow();
   void leave_s_curve(Tick at);
   JerkLimits jerk_limits(const RampSpec& ramp) const;
-  double slope_of(Rational ticks_per_level) const;
+  double slope_of(Rational z) const;
 
   RampSpec ramp_;
   MotionPhase phase_ = MotionPhase::Idle;

@@ -105,7 +105,8 @@ void StepGenerator::leave_s_curve(Tick at) {
 double StepGenerator::steps_to_stop() const {
   if (phase_ == MotionPhase::Idle) return 0;
   if (scurve_) return s_.p->steps_to_stop(t_);
-  return static_cast<double>(ramp_.decel_phase(level_) / ramp_.phase_per_step);
+  const int64_t levels = ramp_.decel_phase(level_) / ramp_.phase_per_step;  // whole levels
+  return static_cast<double>(levels);
 }
 
 }  // namespace stepnode::motion

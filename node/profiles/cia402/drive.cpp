@@ -59,13 +59,10 @@ motion::Rational Drive::quick_stop_slope() const {
 void Drive::carry_out(Stop stop, Tick now) {
   switch (stop) {
     case Stop::None: return;
+    // Disabled drive function: the pulses stop now, whichever front end moves. Immediate
+    // (current or voltage limit): the fastest stop that holds the motor, the same for a stepper.
     case Stop::DisableDrive:
-      // The drive function is disabled: the pulses stop now, whichever front end moves.
-      core_.abort(this, now);
-      break;
-    case Stop::Immediate:
-      core_.abort(this, now);  // current/voltage limit: the fastest stop that holds the motor
-      break;
+    case Stop::Immediate: core_.abort(this, now); break;
     case Stop::SlowDownRamp: core_.stop(now); break;
     case Stop::QuickStopRamp: core_.stop(now, quick_stop_slope()); break;
   }

@@ -124,12 +124,11 @@ constexpr uint32_t kNegativeLimit = 1u << 0, kPositiveLimit = 1u << 1, kHomeSwit
 }
 
 // The objects of `axes` axes (1..kMaxAxes).
-void add_objects(od::Dictionary& dictionary, unsigned axes);
+void add_objects(od::Dictionary& od, unsigned axes);
 
-// The default PDOs of `axis`: PDO numbers n (0-based: communication 0x1400 + n / 0x1800 + n,
+// The default PDOs of axis `a`: PDO numbers n (0-based: communication 0x1400 + n / 0x1800 + n,
 // mapping 0x1600 + n / 0x1A00 + n) first_rpdo {6040h, 6060h}, first_rpdo + 1 {607Ah, 60FFh},
 // first_tpdo {6041h, 6061h}, first_tpdo + 1 {6064h, 606Ch}. The PDO objects must exist.
-void set_default_pdos(od::Dictionary& dictionary, unsigned axis, unsigned first_rpdo,
-                      unsigned first_tpdo);
+void set_default_pdos(od::Dictionary& od, unsigned a, unsigned first_rpdo, unsigned first_tpdo);
 
 }  // namespace stepnode::cia402

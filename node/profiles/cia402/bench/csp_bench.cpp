@@ -82,8 +82,9 @@ Figures run(int hz, int cycles, double amplitude, double period_s, double jitter
     const int64_t n = std::llabs(g.to - g.from);
     const Tick len = k + 1 < segments.size() ? segments[k + 1].start - g.start : cycle;
     for (int64_t i = 1; i <= n && s < motor.times.size(); ++i, ++s) {
-      const double ideal =
-          static_cast<double>(g.start) + static_cast<double>(i) * static_cast<double>(len) / n;
+      const double ideal = static_cast<double>(g.start) + static_cast<double>(i) *
+                                                              static_cast<double>(len) /
+                                                              static_cast<double>(n);
       if (motor.times[s] > (k + 1 < segments.size() ? segments[k + 1].start : INT64_MAX)) break;
       const double err = std::fabs(static_cast<double>(motor.times[s]) - ideal) * 1e9 / kClockHz;
       f.worst_ns = std::max(f.worst_ns, err);
