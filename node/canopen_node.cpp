@@ -156,6 +156,13 @@ void CanopenNode::start(uint64_t now_us) {
         "bit "
         "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
         *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
+  if (configured() && options_.boot_listen_us > 0) {
+    spdlog::info("listening {} ms for another device with node-ID {} before the boot-up",
+                 options_.boot_listen_us / 1000, node_id());
+    conflict_.listen(node_id(), now_us, options_.boot_listen_us);
+    update_receive_filters();  // 0x700+id, 0x580+id and the EMCY COB-ID are among them
+    return;
+  }
   initialise(true, now_us);
 }
 
@@ -310,34 +317,6 @@ void CanopenNode::communication_error(CommunicationError error, uint8_t node, ui
   }
 }
 
-void CanopenNode::node_id_conflict(const NodeIdConflict::Finding& finding, uint64_t now_us) {
-  // Manufacturer bytes: the COB-ID heard (LE), 1 if this node gave its node-ID up.
-  const bool yield = finding.action == NodeIdConflict::Action::Yield;
-  const std::array<uint8_t, 5> info{static_cast<uint8_t>(finding.cob_id),
-                                    static_cast<uint8_t>(finding.cob_id >> 8),
-                                    static_cast<uint8_t>(yield), 0, 0};
-  if (yield) {
-    spdlog::error(
-        "node-ID {} is already used by another device (0x{:03X} heard within {} s of boot-up): "
-        "this node "
-        "gives it up and waits for an LSS master",
-        node_id(), finding.cob_id, NodeIdConflict::kClaimPeriodUs / 1'000'000);
-    emcy_.report(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
-    lss_.give_up_node_id();
-    initialise(false, now_us);
-    return;
-  }
-  if (!emcy_.active(emcy_code::kCommunication))
-    spdlog::error(
-        "node-ID {}: another device sends on 0x{:03X}{}; this node had the node-ID first and keeps "
-        "it",
-        node_id(), finding.cob_id, finding.boot_up ? " (its boot-up)" : "");
-  // A newcomer that booted with this node-ID hears this node's heartbeat within its claim
-  // period; first, so that it yields to the heartbeat rather than to the EMCY.
-  if (finding.boot_up) heartbeat_.send_now(state_, now_us);
-  emcy_.raise(emcy_code::kCommunication, error_bits::kCommunication, info, now_us);
-}
-
 bool CanopenNode::serves(const od::CanFrame& frame) {
   const std::vector<ReceiveFilter>& list = receive_filters();
   if (list.empty()) return true;  // more CAN-IDs than the kernel filters: every frame is routed
@@ -363,6 +342,13 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
   if (app_ && booted_) app_->advance(sync ? arrival_us : now_us);
   if (frame.id == lss::kMasterToSlave) {
     on_lss_frame(frame, now_us);  // in every NMT state, with a node-ID or without
+    return;
+  }
+  if (conflict_.listening()) {
+    // Still in initialisation, before the boot-up: only another device's frames matter
+    // (an NMT command finds the node not booted yet; the boot-up follows the listening).
+    if (auto c = conflict_.on_frame(frame, od::decode<uint32_t>(emcy_cob_id_->value), now_us))
+      node_id_conflict(*c, now_us);
     return;
   }
   // Without a node-ID only a broadcast reaches the node, and only a reset means anything
@@ -397,6 +383,10 @@ void CanopenNode::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t 
 }
 
 void CanopenNode::on_tick(uint64_t now_us) {
+  if (conflict_.listening()) {
+    if (now_us >= conflict_.listen_end_us()) initialise(true, now_us);  // nobody heard
+    return;
+  }
   if (app_ && booted_) app_->advance(now_us);
   if (filters_dirty_) update_receive_filters();  // a COB-ID the node wrote itself
   consumer_.on_tick(now_us);
@@ -415,6 +405,7 @@ uint64_t CanopenNode::next_deadline_us(uint64_t now_us) {
   // The services on_tick runs in this state, and no others: one it skips would otherwise
   // report a deadline that never moves and wake the loop for nothing.
   if (filters_dirty_) return now_us;
+  if (conflict_.listening()) return conflict_.listen_end_us();
   uint64_t next = app_ && booted_ ? app_->next_advance_us(now_us) : kNoDeadline;
   next = earliest(next, consumer_.next_deadline_us());
   if (state_ == NmtState::Initialising) return next;

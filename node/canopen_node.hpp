@@ -40,6 +40,9 @@ struct NodeOptions {
   DeviceLayout layout;  // the profiles and axes (the PDO count follows)
   std::filesystem::path state_dir = ".";
   uint64_t sdo_timeout_us = 1'000'000;
+  // How long the node listens for another device with its node-ID before its first boot-up
+  // (README, "Duplicate node-ID"); 0: it boots at once and checks in the claim period only.
+  uint64_t boot_listen_us = 0;
   // The wall clock for a TIME producer (us since 1970, CLOCK_REALTIME in node/main.cpp);
   // empty: a producer sends the network time it received (tests give virtual time).
   TimeService::WallClock wall_clock;
@@ -63,7 +66,9 @@ class CanopenNode {
   ~CanopenNode();
 
   // Power-on: load stored parameters, send boot-up, enter pre-operational. Without a
-  // node-ID: nothing but the LSS slave, until a master gives it one (CiA 305).
+  // node-ID: nothing but the LSS slave, until a master gives it one (CiA 305). With
+  // boot_listen_us, the boot-up waits that long, and never comes if another device with
+  // the node-ID was heard (the node then waits for LSS, as without a node-ID).
   void start(uint64_t now_us);
   // `arrival_us`: when the frame reached the interface (kernel timestamp; 0 unknown): the
   // synchronous window 0x1007 is measured from a SYNC's arrival.

@@ -14,6 +14,8 @@
 namespace stepnode::node {
 namespace {
 
+constexpr int64_t kMaxBootListenMs = 60'000;
+
 std::filesystem::path default_state_dir() {
   if (const char* s = std::getenv("STATE_DIRECTORY")) return s;  // systemd StateDirectory=
   if (const char* s = std::getenv("XDG_STATE_HOME")) return std::filesystem::path(s) / "stepnode";
@@ -110,6 +112,9 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll))
     cfg.options.device.serial_number = static_cast<uint32_t>(*n);
   if (auto level = file.string("log_level")) cfg.log_level = *level;
+  // boot_listen_ms: listen for another device with the node-ID before the boot-up.
+  if (auto ms = file.integer("boot_listen_ms", 0, kMaxBootListenMs))
+    cfg.options.boot_listen_us = static_cast<uint64_t>(*ms) * 1000;
   // self_start: the default of 0x1F80 NMT startup (CiA 302-2 bit 2: 0 = enter operational
   // by itself after boot-up); [defaults] "1F80" and a stored value go over it.
   if (auto on = file.boolean("self_start"))
@@ -167,6 +172,12 @@ void check_serial_numbers(const NodeConfig& cfg) {
                      ", above 4294967295");
 }
 
+void apply_boot_listen_argument(int64_t ms, NodeConfig& cfg) {
+  if (ms < 0 || ms > kMaxBootListenMs)
+    throw UsageError("--boot-listen-ms " + std::to_string(ms) + ": must be 0..60000");
+  cfg.options.boot_listen_us = static_cast<uint64_t>(ms) * 1000;
+}
+
 }  // namespace
 
 NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_code) {
@@ -177,6 +188,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   std::string state_dir;
   std::string node_id;
   std::string serial_number;
+  int64_t boot_listen_ms = 0;
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
   app.add_option("--node-id", node_id,
                  "CANopen node id, 1..127, or none (255): no id, the node waits for an LSS master "
@@ -191,6 +203,10 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
                  "the longest the node sleeps between its deadlines, in microseconds "
                  "(100..10000000, default 1000000)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
+  app.add_option("--boot-listen-ms", boot_listen_ms,
+                 "listen this long for another device with the node-ID before the boot-up; "
+                 "one heard: no boot-up, the node waits for LSS (0..60000, default 0: boot at "
+                 "once, yield within 2 s)");
   app.add_flag("--print-eds", cfg.print_eds, "print the device's EDS (CiA 306) and exit");
   try {
     app.parse(argc, argv);
@@ -212,6 +228,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (app.count("--serial-number"))
     cfg.options.device.serial_number = parse_serial_number(serial_number);
   check_serial_numbers(cfg);
+  if (app.count("--boot-listen-ms")) apply_boot_listen_argument(boot_listen_ms, cfg);
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
   if (cfg.tick_us < 100 || cfg.tick_us > 10'000'000)

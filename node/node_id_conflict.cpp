@@ -2,9 +2,20 @@
 
 namespace stepnode::node {
 
+void NodeIdConflict::listen(uint8_t node_id, uint64_t now_us, uint64_t duration_us) {
+  node_id_ = node_id;
+  listen_end_us_ = now_us + duration_us;
+}
+
 void NodeIdConflict::booted(uint8_t node_id, uint64_t now_us) {
   node_id_ = node_id;
   booted_us_ = now_us;
+  listen_end_us_ = 0;
+}
+
+void NodeIdConflict::forget() {
+  node_id_ = 0;
+  listen_end_us_ = 0;
 }
 
 std::optional<NodeIdConflict::Finding> NodeIdConflict::on_frame(const od::CanFrame& frame,
@@ -19,7 +30,8 @@ std::optional<NodeIdConflict::Finding> NodeIdConflict::on_frame(const od::CanFra
   Finding f;
   f.cob_id = frame.id;
   f.boot_up = heartbeat && frame.data[0] == 0x00;
-  f.action = now_us - booted_us_ < kClaimPeriodUs ? Action::Yield : Action::Keep;
+  if (listening()) f.action = Action::Refuse;
+  else f.action = now_us - booted_us_ < kClaimPeriodUs ? Action::Yield : Action::Keep;
   return f;
 }
 

@@ -87,3 +87,43 @@ def test_a_second_node_with_the_same_id_yields_it(master, start_node):
     assert master.wait_bootup(0x25, timeout=5.0) is not None, second.log()
     assert master.read_u32(0x25, 0x1018, 4) == 0x12
     assert master.read_u32(node_id, 0x1018, 4) == 0x11
+
+
+def test_a_node_that_listens_before_boot_up_refuses_a_node_id_in_use(master, start_node, tmp_path):
+    node_id = 0x26
+    hb_cob = 0x700 + node_id
+    # The device that has the node-ID: heartbeat every 100 ms (0x1017).
+    start_node(node_id, ["--serial-number", "0x21",
+                         "--config", config(tmp_path, "hb.toml", '[defaults]\n"1017" = 100\n')])
+    master.flush()
+    second = start_node(node_id, ["--serial-number", "0x22", "--boot-listen-ms", "400"], wait_bootup=False)
+    frames = master.collect(1.5, lambda m: m.arbitration_id in (hb_cob, 0x80 + node_id, 0x580 + node_id))
+    # Only the first device's heartbeats (state 0x7F, pre-operational): no boot-up {00} and
+    # no EMCY from the second, which never sent a frame with the node-ID.
+    assert frames and all(m.arbitration_id == hb_cob and bytes(m.data) == b"\x7f" for m in frames), \
+        [(hex(m.arbitration_id), bytes(m.data).hex()) for m in frames]
+    assert second.alive
+    assert "heard before boot-up" in second.log(), second.log()
+
+    bus = open_bus()
+    try:
+        lss = LssMaster(bus)
+        assert lss.identify_non_configured() == 1
+        addr = lss.fast_scan()
+        assert addr is not None and addr.serial_number == 0x22
+        assert lss.configure_node_id(0x27) == 0
+        master.flush()
+        lss.switch_state_global(MODE_WAITING)
+    finally:
+        bus.shutdown()
+    assert master.wait_bootup(0x27, timeout=5.0) is not None, second.log()
+    assert master.read_u32(0x27, 0x1018, 4) == 0x22
+
+
+def test_a_node_that_listens_and_hears_nobody_boots_after_the_listening(master, start_node):
+    started = time.monotonic()
+    node = start_node(0x28, ["--boot-listen-ms", "300"])
+    # The boot-up cannot come before the listening ended (a lower bound only: UML's clock).
+    assert time.monotonic() - started >= 0.3
+    assert bytes(node.bootup.data) == b"\x00"
+    assert master.read_u32(0x28, 0x1000, 0) is not None

@@ -87,6 +87,26 @@ TEST_F(ConfigTest, SerialNumberFromTheCommandLineOrTheFile) {
   }
 }
 
+TEST_F(ConfigTest, BootListenFromTheCommandLineOrTheFile) {
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5"}).options.boot_listen_us, 0u);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--boot-listen-ms", "1500"})
+                .options.boot_listen_us,
+            1'500'000u);
+  std::string path = config("boot_listen_ms = 250\n");
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path}).options.boot_listen_us,
+            250'000u);
+  EXPECT_EQ(parse({"--iface", "vcan0", "--node-id", "5", "--config", path, "--boot-listen-ms", "0"})
+                .options.boot_listen_us,
+            0u);
+  for (const char* bad : {"-1", "60001", "x"}) {
+    std::string msg = error_of({"--iface", "vcan0", "--node-id", "5", "--boot-listen-ms", bad});
+    EXPECT_TRUE(has(msg, "--boot-listen-ms")) << bad << " -> " << msg;
+  }
+  std::string msg =
+      error_of({"--iface", "vcan0", "--node-id", "5", "--config", config("boot_listen_ms = -5\n")});
+  EXPECT_TRUE(has(msg, "boot_listen_ms")) << msg;
+}
+
 TEST_F(ConfigTest, NodeIdNotANumber) {
   std::string msg = error_of({"--iface", "vcan0", "--node-id", "five"});
   EXPECT_TRUE(has(msg, "five") || has(msg, "node-id")) << msg;

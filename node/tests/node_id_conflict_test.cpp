@@ -92,5 +92,86 @@ TEST_F(NodeIdConflictTest, SdoAnswersAndEmcysOfAnotherDeviceCountRemoteFramesDoN
   EXPECT_EQ(emcys(from)[0].data[4], 0x00);
 }
 
+// With boot_listen_us the node listens before its boot-up (README, "Duplicate node-ID").
+class BootListenTest : public NodeIdConflictTest {
+ protected:
+  void SetUp() override {
+    NodeOptions o;
+    o.device.node_id = kId;
+    o.layout.axes = 1;
+    o.state_dir = dir.path;
+    o.boot_listen_us = 500'000;
+    started = t;
+    make(o);
+  }
+  uint64_t started = 0;
+};
+
+TEST_F(BootListenTest, NobodyHeardTheBootUpComesAtTheListeningsEnd) {
+  advance_ms(499);
+  EXPECT_TRUE(sent.empty()) << "nothing before the boot-up (CiA 301: initialisation)";
+  EXPECT_EQ(node->state(), NmtState::Initialising);
+  advance_ms(1);
+  // The boot-up message: 0x700+id, one byte 0 (CiA 301 7.2.8.3.2.1), at 500 ms.
+  ASSERT_FALSE(sent.empty());
+  EXPECT_EQ(sent.front(), CanFrame(kHeartbeatId, {0x00}));
+  EXPECT_EQ(sent_at.front(), started + 500'000);
+  EXPECT_EQ(node->state(), NmtState::PreOperational);
+  // The claim period starts at the boot-up: a device heard now makes the node yield.
+  advance_ms(1000);
+  frame(CanFrame(kHeartbeatId, {0x05}));
+  EXPECT_FALSE(node->configured());
+}
+
+TEST_F(BootListenTest, AHeartbeatHeardWhileListeningMeansNoFrameWithTheNodeIdEver) {
+  advance_ms(200);
+  frame(CanFrame(kHeartbeatId, {0x05}));  // the device that has node-ID 5
+  advance_ms(3000);
+  frame(CanFrame(kSdoRx, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));
+  nmt(0x01);
+  EXPECT_TRUE(sent.empty()) << "no boot-up, EMCY, heartbeat or SDO answer";
+  EXPECT_FALSE(node->configured());
+  // It waits for an LSS master like a node without a node-ID (CiA 305 identify
+  // non-configured remote slave: 0x4C, answered with 0x50 on 0x7E4).
+  frame(lss({0x4C}));
+  EXPECT_EQ(sent, (std::vector<CanFrame>{CanFrame(0x7E4, {0x50, 0, 0, 0, 0, 0, 0, 0})}));
+}
+
+TEST_F(BootListenTest, AnSdoAnswerOrEmcyAsThisNodeIsARefusalARemoteFrameIsNot) {
+  CanFrame guard(kHeartbeatId, {});
+  guard.rtr = true;
+  frame(guard);  // a master guarding node 5: says nothing of who has the id
+  advance_ms(100);
+  EXPECT_TRUE(node->configured());
+  frame(CanFrame(kEmcyId, {0x00, 0x10, 0x01, 0, 0, 0, 0, 0}));  // node 5's EMCY
+  EXPECT_FALSE(node->configured());
+  advance_ms(1000);
+  EXPECT_TRUE(sent.empty());
+
+  make(NodeOptions{[&] {
+    NodeOptions o;
+    o.device.node_id = kId;
+    o.state_dir = dir.path;
+    o.boot_listen_us = 500'000;
+    return o;
+  }()});
+  frame(CanFrame(kSdoTx, {0x43, 0x00, 0x10, 0x00, 0x92, 0x01, 0x04, 0x00}));  // node 5's answer
+  advance_ms(1000);
+  EXPECT_FALSE(node->configured());
+  EXPECT_TRUE(sent.empty());
+}
+
+TEST_F(BootListenTest, NmtAndSdoWhileListeningFindTheNodeNotBootedYet) {
+  advance_ms(100);
+  nmt(0x01);  // start remote node: the node is still in initialisation
+  frame(CanFrame(kSdoRx, {0x40, 0x00, 0x10, 0x00, 0, 0, 0, 0}));
+  EXPECT_TRUE(sent.empty());
+  advance_ms(400);
+  EXPECT_EQ(sent.front(), CanFrame(kHeartbeatId, {0x00}));
+  EXPECT_EQ(node->state(), NmtState::PreOperational) << "the start was not remembered";
+  // An LSS master can still give it another node-ID while it listens (CiA 305 works in
+  // every state); covered by the LSS tests.
+}
+
 }  // namespace
 }  // namespace stepnode::node::test
