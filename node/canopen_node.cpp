@@ -265,11 +265,15 @@ void CanopenNode::on_lss_frame(const od::CanFrame& frame, uint64_t now_us) {
   if (r.response) send(*r.response);
   if (r.activate_bit_timing_delay_ms) {
     const auto index = lss_.active_bit_timing();
-    spdlog::warn(
-        "LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's bit "
-        "rate; apply it with `tools/lss-bit-timing {} IFACE --apply` (ip link, root)",
-        index ? *lss::bit_rate_kbit(*index) : 0, *r.activate_bit_timing_delay_ms,
-        options_.state_dir.string());
+    const unsigned kbit = index ? *lss::bit_rate_kbit(*index) : 0;
+    const uint16_t delay_ms = *r.activate_bit_timing_delay_ms;
+    if (options_.activate_bit_timing && kbit) options_.activate_bit_timing(kbit, delay_ms, now_us);
+    else
+      spdlog::warn(
+          "LSS: activate bit timing {} kbit/s after {} ms: stepnode does not set the interface's "
+          "bit rate without --apply-bit-timing; or apply it with `tools/lss-bit-timing {} IFACE "
+          "--apply` (ip link, root)",
+          kbit, delay_ms, options_.state_dir.string());
   }
   if (r.boot) {
     spdlog::info("LSS: node-ID {} configured: reset communication and boot-up",

@@ -46,6 +46,9 @@ struct NodeOptions {
   // The wall clock for a TIME producer (us since 1970, CLOCK_REALTIME in node/main.cpp);
   // empty: a producer sends the network time it received (tests give virtual time).
   TimeService::WallClock wall_clock;
+  // CiA 305 activate bit timing: the process carries it out on the interface (node/
+  // bit_timing_switch.hpp). Empty: the node only logs it (the bit rate is set outside).
+  std::function<void(unsigned kbit, uint16_t delay_ms, uint64_t now_us)> activate_bit_timing;
 };
 
 // What the CAN controller reports (SocketCAN error frames), as the node sees it.

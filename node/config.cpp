@@ -112,6 +112,7 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll))
     cfg.options.device.serial_number = static_cast<uint32_t>(*n);
   if (auto level = file.string("log_level")) cfg.log_level = *level;
+  if (auto on = file.boolean("apply_bit_timing")) cfg.apply_bit_timing = *on;
   // boot_listen_ms: listen for another device with the node-ID before the boot-up.
   if (auto ms = file.integer("boot_listen_ms", 0, kMaxBootListenMs))
     cfg.options.boot_listen_us = static_cast<uint64_t>(*ms) * 1000;
@@ -189,6 +190,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   std::string node_id;
   std::string serial_number;
   int64_t boot_listen_ms = 0;
+  bool apply_bit_timing = false;
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
   app.add_option("--node-id", node_id,
                  "CANopen node id, 1..127, or none (255): no id, the node waits for an LSS master "
@@ -208,6 +210,9 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
                  "one heard: no boot-up, the node waits for LSS (0..60000, default 0: boot at "
                  "once, yield within 2 s)");
   app.add_flag("--print-eds", cfg.print_eds, "print the device's EDS (CiA 306) and exit");
+  app.add_flag("--apply-bit-timing", apply_bit_timing,
+               "set the interface's bit rate to the LSS bit timing (at start and on LSS activate "
+               "bit timing; needs CAP_NET_ADMIN)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -228,6 +233,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (app.count("--serial-number"))
     cfg.options.device.serial_number = parse_serial_number(serial_number);
   check_serial_numbers(cfg);
+  if (apply_bit_timing) cfg.apply_bit_timing = true;  // over the file's
   if (app.count("--boot-listen-ms")) apply_boot_listen_argument(boot_listen_ms, cfg);
   if (!state_dir.empty()) cfg.options.state_dir = state_dir;
   if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();

@@ -24,6 +24,9 @@ struct NodeConfig {
   // Object defaults from the config's [defaults] table: "1017" or "1016:1" -> value text.
   std::vector<std::pair<std::string, std::string>> object_defaults;
   bool print_eds = false;
+  // The node sets its interface's bit rate itself (CAP_NET_ADMIN): to the bit timing an LSS
+  // master stored, at start, and at an LSS activate bit timing (README, "LSS").
+  bool apply_bit_timing = false;
 };
 
 // Bad input (an argument, the config file): the process prints "stepnode: <message>" and

@@ -8,9 +8,11 @@
 #include <string>
 
 #include "canio/event_loop.hpp"
+#include "canio/link_config.hpp"
 #include "canio/link_info.hpp"
 #include "canio/sd_notify.hpp"
 #include "canio/socketcan.hpp"
+#include "node/bit_timing_switch.hpp"
 #include "node/node_id_list.hpp"
 #include "node/node_set.hpp"
 
@@ -53,8 +55,9 @@ uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
   return now - static_cast<uint64_t>(age_us);
 }
 
-// CiA 305's stored bit timing against the interface's bit rate: stepnode never sets it (root
-// does, with ip link; tools/lss-bit-timing is the hook), but it says when they differ.
+// CiA 305's stored bit timing against the interface's bit rate. With --apply-bit-timing the
+// node sets a CAN controller to it; otherwise root does (ip link; tools/lss-bit-timing is
+// the hook) and the node says when they differ.
 void report_bit_timing(Device& device, const NodeConfig& cfg) {
   const auto index = device.canopen().lss().active_bit_timing();
   const auto link = index ? canio::link_info(cfg.iface) : std::nullopt;
@@ -62,21 +65,27 @@ void report_bit_timing(Device& device, const NodeConfig& cfg) {
   const unsigned kbit = lss::bit_rate_kbit(*index).value_or(0);
   const std::string hook =
       "tools/lss-bit-timing " + cfg.options.state_dir.string() + " " + cfg.iface + " --apply";
-  if (link->kind == "vcan")
+  if (link->kind == "vcan") {
     spdlog::warn(
         "LSS: the stored bit timing {} kbit/s cannot be applied: {} is a virtual CAN interface "
-        "without a "
-        "bit rate",
+        "without a bit rate",
         kbit, cfg.iface);
-  else if (!link->bit_rate)
+  } else if (link->bit_rate == kbit * 1000) {
+    spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
+  } else if (cfg.apply_bit_timing) {
+    const std::string error = canio::set_can_bit_rate(cfg.iface, kbit * 1000);
+    if (error.empty())
+      spdlog::info("LSS: {} set to the stored bit timing, {} kbit/s", cfg.iface, kbit);
+    else spdlog::error("LSS: the stored bit timing {} kbit/s was not applied: {}", kbit, error);
+  } else if (!link->bit_rate) {
     spdlog::warn("LSS: stored bit timing {} kbit/s; {}'s bit rate is not known (kind \"{}\")", kbit,
                  cfg.iface, link->kind);
-  else if (*link->bit_rate != kbit * 1000)
+  } else {
     spdlog::warn(
         "LSS: the stored bit timing {} kbit/s differs from {}'s {} bit/s; apply it with `{}` "
-        "(root)",
+        "(root) or run the node with --apply-bit-timing",
         kbit, cfg.iface, *link->bit_rate, hook);
-  else spdlog::info("LSS: {} runs at the stored bit timing, {} kbit/s", cfg.iface, kbit);
+  }
 }
 
 uint64_t wall_clock_us() {
@@ -86,19 +95,15 @@ uint64_t wall_clock_us() {
          static_cast<uint64_t>(real.tv_nsec) / 1000;
 }
 
-NodeOptions with_wall_clock(NodeOptions o) {
-  o.wall_clock = wall_clock_us;  // a TIME producer sends this host's time
-  return o;
-}
-
 class NodeProcess {
  public:
   explicit NodeProcess(const NodeConfig& cfg)
       : cfg_(cfg),
         can_(cfg.iface),
+        bit_timing_([this](uint32_t rate) { return canio::set_can_bit_rate(cfg_.iface, rate); }),
         set_(
-            options_per_node(with_wall_clock(cfg.options), cfg.node_ids), cfg.object_defaults,
-            [this](const od::CanFrame& f) { can_.send(f); }, cfg.tick_us) {
+            options_per_node(with_process_hooks(cfg.options), cfg.node_ids), cfg.object_defaults,
+            [this](const od::CanFrame& f) { send(f); }, cfg.tick_us) {
     filter_socket();
     if (set_.size() > 1) {
       const size_t granted = can_.request_receive_buffer(set_.size() * kReceiveBufferPerNode);
@@ -109,6 +114,22 @@ class NodeProcess {
   int run();
 
  private:
+  // The host's wall clock for TIME producers; the bit timing switch, when the node applies it.
+  NodeOptions with_process_hooks(NodeOptions o) {
+    o.wall_clock = wall_clock_us;
+    if (cfg_.apply_bit_timing)
+      o.activate_bit_timing = [this](unsigned kbit, uint16_t delay_ms, uint64_t now_us) {
+        bit_timing_.activate(kbit, delay_ms, now_us);
+        arm_for_next_deadline();
+      };
+    return o;
+  }
+  // Every frame of every node; none while a bit timing switch keeps the node silent.
+  void send(const od::CanFrame& f) {
+    if (bit_timing_.active() && bit_timing_.silent(canio::EventLoop::now_us()))
+      bit_timing_.dropped_one();
+    else can_.send(f);
+  }
   void filter_socket();
   void tell_ready_once_sent();
   void arm_for_next_deadline();
@@ -117,6 +138,7 @@ class NodeProcess {
 
   const NodeConfig& cfg_;
   canio::SocketCan can_;
+  BitTimingSwitch bit_timing_;  // before set_: the nodes' hooks reach it
   NodeSet set_;
   canio::EventLoop loop_;
   // The service manager (README "Running as a service"): READY once the nodes serve, the
@@ -162,7 +184,8 @@ void NodeProcess::tell_ready_once_sent() {
 // controller could not take yet is retried within a poll period, as the tick did.
 void NodeProcess::arm_for_next_deadline() {
   const uint64_t now = canio::EventLoop::now_us();
-  uint64_t at = std::min(set_.next_deadline_us(), now + cfg_.tick_us);
+  uint64_t at =
+      std::min({set_.next_deadline_us(), now + cfg_.tick_us, bit_timing_.next_deadline_us()});
   if (can_.has_pending() || !ready_sent_) at = std::min(at, poll_deadline(now));
   loop_.arm_at(timer_, at);
 }
@@ -209,6 +232,7 @@ int NodeProcess::run() {
   if (uint64_t period = notifier_.watchdog_period_us())
     loop_.every(period, [this] { notifier_.watchdog(); });
   timer_ = loop_.add_timer([this] {
+    bit_timing_.on_tick(canio::EventLoop::now_us());
     set_.on_tick(canio::EventLoop::now_us());
     can_.flush();
     tell_ready_once_sent();

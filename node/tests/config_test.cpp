@@ -107,6 +107,21 @@ TEST_F(ConfigTest, BootListenFromTheCommandLineOrTheFile) {
   EXPECT_TRUE(has(msg, "boot_listen_ms")) << msg;
 }
 
+TEST_F(ConfigTest, ApplyBitTimingFromTheCommandLineOrTheFile) {
+  EXPECT_FALSE(parse({"--iface", "vcan0", "--node-id", "5"}).apply_bit_timing);
+  EXPECT_TRUE(parse({"--iface", "vcan0", "--node-id", "5", "--apply-bit-timing"}).apply_bit_timing);
+  EXPECT_TRUE(
+      parse({"--iface", "vcan0", "--node-id", "5", "--config", config("apply_bit_timing = true\n")})
+          .apply_bit_timing);
+  // The command line wins over the file.
+  EXPECT_TRUE(parse({"--iface", "vcan0", "--node-id", "5", "--config",
+                     config("apply_bit_timing = false\n"), "--apply-bit-timing"})
+                  .apply_bit_timing);
+  std::string msg = error_of(
+      {"--iface", "vcan0", "--node-id", "5", "--config", config("apply_bit_timing = 3\n")});
+  EXPECT_TRUE(has(msg, "apply_bit_timing")) << msg;
+}
+
 TEST_F(ConfigTest, NodeIdNotANumber) {
   std::string msg = error_of({"--iface", "vcan0", "--node-id", "five"});
   EXPECT_TRUE(has(msg, "five") || has(msg, "node-id")) << msg;
