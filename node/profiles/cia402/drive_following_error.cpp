@@ -32,8 +32,8 @@ Tick ceil_div(__int128 a, __int128 b) { return static_cast<Tick>((a + b - 1) / b
 }  // namespace
 
 bool Drive::following_position() const {
-  return machine_.operation_enabled() && (mode_display_ == Mode::CyclicSyncPosition ||
-                                          mode_display_ == Mode::InterpolatedPosition);
+  return machine_.operation_enabled() &&
+         (mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition);
 }
 
 bool Drive::following_error_watched() const {
