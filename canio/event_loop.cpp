@@ -49,7 +49,21 @@ void EventLoop::watch(int fd, Callback on_readable) {
   ev.events = EPOLLIN;
   ev.data.fd = fd;
   if (::epoll_ctl(epoll_fd_, EPOLL_CTL_ADD, fd, &ev) < 0) throw_system_error("epoll_ctl");
-  callbacks_[fd] = std::move(on_readable);
+  callbacks_[fd].readable = std::move(on_readable);
+}
+
+void EventLoop::on_writable(int fd, Callback on_writable) {
+  callbacks_[fd].writable = std::move(on_writable);
+}
+
+void EventLoop::want_writable(int fd, bool wanted) {
+  Watch& w = callbacks_[fd];
+  if (w.writable_wanted == wanted) return;
+  epoll_event ev{};
+  ev.events = EPOLLIN | (wanted ? EPOLLOUT : 0u);
+  ev.data.fd = fd;
+  if (::epoll_ctl(epoll_fd_, EPOLL_CTL_MOD, fd, &ev) < 0) throw_system_error("epoll_ctl");
+  w.writable_wanted = wanted;
 }
 
 void EventLoop::every(uint64_t period_us, Callback on_tick) {
@@ -97,6 +111,19 @@ void EventLoop::stop_on_signals() {
   });
 }
 
+void EventLoop::dispatch(int fd, uint32_t events) {
+  // Looked up for each callback: a callback may change what is watched.
+  if (events & (EPOLLIN | EPOLLERR | EPOLLHUP)) {
+    auto it = callbacks_.find(fd);
+    if (it != callbacks_.end() && it->second.readable) it->second.readable();
+  }
+  if (events & EPOLLOUT) {
+    auto it = callbacks_.find(fd);
+    if (it != callbacks_.end() && it->second.writable_wanted && it->second.writable)
+      it->second.writable();
+  }
+}
+
 void EventLoop::run() {
   running_ = true;
   epoll_event events[16];
@@ -107,10 +134,7 @@ void EventLoop::run() {
       if (errno == EINTR) continue;
       throw_system_error("epoll_wait");
     }
-    for (int i = 0; i < n && running_; ++i) {
-      auto it = callbacks_.find(events[i].data.fd);
-      if (it != callbacks_.end()) it->second();
-    }
+    for (int i = 0; i < n && running_; ++i) dispatch(events[i].data.fd, events[i].events);
   }
 }
 

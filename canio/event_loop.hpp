@@ -17,6 +17,11 @@ class EventLoop {
   EventLoop& operator=(const EventLoop&) = delete;
 
   void watch(int fd, Callback on_readable);
+  // `on_writable` runs while `fd` (already watched) can take data and writability is wanted
+  // (want_writable): a send queue waits for the kernel instead of polling it. Not wanted
+  // at first, so a socket that is almost always writable does not wake the loop.
+  void on_writable(int fd, Callback on_writable);
+  void want_writable(int fd, bool wanted);
   // Calls `on_tick` every `period_us` (a timerfd; missed expirations are coalesced).
   void every(uint64_t period_us, Callback on_tick);
   // A one-shot timer on absolute CLOCK_MONOTONIC time (a timerfd with TFD_TIMER_ABSTIME):
@@ -34,8 +39,14 @@ class EventLoop {
   static uint64_t now_us();  // CLOCK_MONOTONIC
 
  private:
+  void dispatch(int fd, uint32_t events);
+
   int epoll_fd_ = -1;
-  std::map<int, Callback> callbacks_;
+  struct Watch {
+    Callback readable, writable;
+    bool writable_wanted = false;
+  };
+  std::map<int, Watch> callbacks_;
   std::vector<int> owned_fds_;
   bool running_ = false;
   uint64_t wakeups_ = 0;

@@ -15,9 +15,9 @@ constexpr uint64_t kNoDeadline = std::numeric_limits<uint64_t>::max();
 // The conservative answer of a part that cannot say exactly when it next needs to run: in
 // one poll period, the node's fixed 1 ms tick before issue 13. So a part that is not (yet)
 // precise behaves as it always did, and correctness never depends on a deadline forgotten.
-// Still used by: the defaults of Application and Profile (a part that does not say), a
-// CiA 402 drive interpolating a CSP/IP segment (its demand moves at every tick), an axis
-// whose job ended without its owner told yet (AxisBank, one wake-up at most), and, as
+// Still used by: the defaults of Application and Profile (a part that does not say), an
+// axis whose job ended without its owner told yet (AxisBank, one wake-up at most), a
+// send queue the kernel refuses though the socket says writable (node_process), and, as
 // the wake period of a moving axis at horizon 0, the batch of steps denser than it
 // (AxisBank; README "Running a node" says why).
 constexpr uint64_t kPollUs = 1000;

@@ -11,6 +11,7 @@
 #include "canio/link_config.hpp"
 #include "canio/link_info.hpp"
 #include "canio/sd_notify.hpp"
+#include "canio/send_drain.hpp"
 #include "canio/socketcan.hpp"
 #include "node/bit_timing_switch.hpp"
 #include "node/node_id_list.hpp"
@@ -145,6 +146,12 @@ class NodeProcess {
   // watchdog petted by a timer of this loop, so a loop that hangs stops petting and the
   // manager restarts the process.
   canio::ServiceNotifier notifier_;
+  // Frames the controller could not take yet go out when the socket is writable again.
+  canio::SendDrain drain_{loop_, can_.fd(), [this] { return can_.flush(); },
+                          [this] {
+                            tell_ready_once_sent();
+                            arm_for_next_deadline();
+                          }};
   bool ready_sent_ = false;
   int timer_ = -1;
 };
@@ -181,12 +188,14 @@ void NodeProcess::tell_ready_once_sent() {
 }
 
 // The nodes' timed work: one absolute timer for the earliest deadline of all. A frame the
-// controller could not take yet is retried within a poll period, as the tick did.
+// controller could not take yet waits for the socket's writability (SendDrain), or, when
+// a queue below the socket refuses it, is retried within a poll period as the tick did.
 void NodeProcess::arm_for_next_deadline() {
   const uint64_t now = canio::EventLoop::now_us();
   uint64_t at =
       std::min({set_.next_deadline_us(), now + cfg_.tick_us, bit_timing_.next_deadline_us()});
-  if (can_.has_pending() || !ready_sent_) at = std::min(at, poll_deadline(now));
+  drain_.update(can_.has_pending());
+  if (drain_.needs_poll()) at = std::min(at, poll_deadline(now));
   loop_.arm_at(timer_, at);
 }
 

@@ -280,15 +280,10 @@ std::optional<Tick> Drive::next_event(Tick now) const {
   if (following_error_since_ && !following_error_) {
     const Tick timeout = Tick{parameters_.following_error_timeout_ms} * motion::kClockHz / 1000;
     sooner(std::max(*following_error_since_ + timeout, now + 1));
+  } else if (!following_error_since_) {
+    if (const std::optional<Tick> leaves = following_error_exit(now)) sooner(*leaves);
   }
   return next;
-}
-
-bool Drive::interpolating_segment(Tick now) const {
-  const bool position_mode =
-      mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
-  return position_mode && machine_.operation_enabled() &&
-         parameters_.following_error_window != UINT32_MAX && now < seg_start_ + seg_ticks_;
 }
 
 void Drive::notify() {

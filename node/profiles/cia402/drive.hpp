@@ -114,12 +114,10 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void advance(motion::Tick now);
   // The earliest tick after `now` (the latest advance) at which advance() changes what the
   // master sees without a step or a frame (issue 13): the position window time (6068h)
-  // or the following error time-out (6066h) running out. The motion's steps and its end
-  // are the core's. Nothing: no timed work.
+  // running out, the following error (CSP, IP) leaving its window 6065h (computed from the
+  // segment, drive_following_error.cpp) or its time-out (6066h) running out. The motion's
+  // steps and its end are the core's. Nothing: no timed work.
   std::optional<motion::Tick> next_event(motion::Tick now) const;
-  // CSP or IP interpolating a segment with a following error window: the demand (6062h)
-  // moves at every tick, between steps too, so the error may leave the window at any tick.
-  bool interpolating_segment(motion::Tick now) const;
   // A SYNC that arrived on the bus at `arrival` and is handled at `now` (CSP, CSV, IP: the
   // set-point written for this cycle takes effect; drive_cyclic.cpp).
   void sync(motion::Tick now, motion::Tick arrival);
@@ -174,6 +172,16 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void cyclic_position(int64_t target, motion::Tick now);
   void cyclic_velocity(int64_t velocity, motion::Tick now);
   void measure_cycle(motion::Tick arrival);
+  // CSP or IP in operation enabled: 60F4h is the demand minus the actual position.
+  bool following_position() const;
+  // ... and 6065h is set: the error is watched.
+  bool following_error_watched() const;
+  // The first tick after `after` at which 60F4h leaves 6065h, the segment's steps taken at
+  // their ticks; nothing if it does not within the segment (or is not watched).
+  std::optional<motion::Tick> following_error_exit(motion::Tick after) const;
+  // 60F4h at an advance `at`: since when it is outside the window, or back in.
+  void track_following_error(motion::Tick at);
+  // ... and at an advance, the fault once it has been outside for 6066h.
   void check_following_error(motion::Tick now);
   int64_t cyclic_demand(motion::Tick now) const;
   motion::RampSpec ramp(uint32_t velocity) const;
@@ -230,11 +238,13 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   int odd_intervals_ = 0;
   int64_t seg_from_ = 0, seg_to_ = 0;
   motion::Tick seg_start_ = 0, seg_ticks_ = 1;
+  int64_t seg_steps_ = 0;  // the steps the segment's job gives (fewer than d: it lags)
   bool csv_running_ = false;
   int32_t ip_set_point_ = 0;
   int32_t following_error_value_ = 0;
   int32_t demand_ = 0;
   std::optional<motion::Tick> following_error_since_;
+  motion::Tick following_error_checked_ = 0;  // the last tick 60F4h was looked at
   bool following_error_ = false;
 };
 

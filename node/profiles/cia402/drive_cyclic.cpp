@@ -19,8 +19,6 @@ using motion::Tick;
 
 namespace {
 
-constexpr uint16_t kFollowingErrorCode = 0x8611;  // CiA 402: following error
-
 int sign(int64_t v) { return v < 0 ? -1 : +1; }
 
 }  // namespace
@@ -76,6 +74,7 @@ void Drive::cyclic_position(int64_t target, Tick now) {
   seg_to_ = target;
   seg_start_ = now;
   seg_ticks_ = std::max<Tick>(cycle_, 1);
+  seg_steps_ = 0;
   int64_t steps = std::llabs(target - from);
   if (steps == 0) {
     if (core_.owned_by(*this)) core_.halt(*this, now);
@@ -86,6 +85,7 @@ void Drive::cyclic_position(int64_t target, Tick now) {
   const int64_t most =
       std::max<int64_t>(1, int64_t{parameters_.max_velocity} * seg_ticks_ / motion::kClockHz);
   steps = std::min({steps, most, seg_ticks_});
+  seg_steps_ = steps;
   motion::RampSpec r;
   r.phase_per_step = seg_ticks_;
   r.base_level = r.run_level = r.min_creep_level = steps;
@@ -121,29 +121,6 @@ int64_t Drive::cyclic_demand(Tick now) const {
   if (now <= seg_start_) return seg_from_;
   const __int128 done = static_cast<__int128>(seg_to_ - seg_from_) * (now - seg_start_);
   return seg_from_ + static_cast<int64_t>(done / seg_ticks_);
-}
-
-void Drive::check_following_error(Tick now) {
-  const bool position_mode =
-      mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
-  following_error_value_ = position_mode && machine_.operation_enabled()
-                               ? static_cast<int32_t>(cyclic_demand(now) - core_.position())
-                               : 0;
-  // 60F4h beyond 6065h for longer than 6066h: bit 13, and a fault (8611h).
-  const bool outside =
-      parameters_.following_error_window != UINT32_MAX &&
-      std::llabs(int64_t{following_error_value_}) > int64_t{parameters_.following_error_window};
-  if (!outside) {
-    following_error_since_.reset();
-    following_error_ = false;
-    return;
-  }
-  if (!following_error_since_) following_error_since_ = now;
-  const Tick timeout = Tick{parameters_.following_error_timeout_ms} * motion::kClockHz / 1000;
-  if (!following_error_ && now - *following_error_since_ >= timeout) {
-    following_error_ = true;
-    carry_out(machine_.fault(kFollowingErrorCode), now);
-  }
 }
 
 }  // namespace stepnode::cia402

@@ -179,12 +179,10 @@ void Cia402Service::master_back(uint64_t) {
 
 uint64_t Cia402Service::next_advance_us(uint64_t now_us) {
   // The motion's steps and its end (a quick stop's ramp, a fault reaction's) are the axes'
-  // deadlines (AxisBank); the drive adds its timers (6066h, 6068h). An interpolated CSP/IP
-  // segment is still polled: the demand moves at every tick, and the following error may
-  // leave its window between two steps.
+  // deadlines (AxisBank); the drive adds its timers (6066h, 6068h) and the tick at which a
+  // CSP/IP segment's following error leaves its window (6065h).
   uint64_t next = kNoDeadline;
   for (const auto& d : drives_) {
-    if (d->interpolating_segment(axes_.now())) next = earliest(next, poll_deadline(now_us));
     if (const std::optional<motion::Tick> at = d->next_event(axes_.now()))
       next = earliest(next, std::max(axes_.micros_at_or_after(*at), now_us + 1));
   }
