@@ -123,7 +123,8 @@ std::string set_can_bit_rate(const std::string& iface, uint32_t bit_rate) {
   const int fd = ::socket(AF_NETLINK, SOCK_RAW | SOCK_CLOEXEC, NETLINK_ROUTE);
   if (fd < 0) return failure(iface, "netlink socket", errno);
   std::string result;
-  if (int e = request(fd, link_up_request(index, false, 1))) result = failure(iface, "link down", e);
+  if (int e = request(fd, link_up_request(index, false, 1)))
+    result = failure(iface, "link down", e);
   else if (int e2 = request(fd, bit_rate_request(index, bit_rate, 2)))
     result = failure(iface, "bit rate " + std::to_string(bit_rate) + " bit/s", e2);
   // Up again whatever happened: the node was running on it.

@@ -27,13 +27,13 @@ std::vector<uint8_t> header(uint32_t len, uint32_t seq, int index, uint32_t flag
                             uint32_t change) {
   std::vector<uint8_t> v;
   put32(v, len);
-  put16(v, 16);     // RTM_NEWLINK
-  put16(v, 0x5);    // NLM_F_REQUEST | NLM_F_ACK
+  put16(v, 16);   // RTM_NEWLINK
+  put16(v, 0x5);  // NLM_F_REQUEST | NLM_F_ACK
   put32(v, seq);
-  put32(v, 0);      // pid: the kernel
-  v.push_back(0);   // AF_UNSPEC
+  put32(v, 0);     // pid: the kernel
+  v.push_back(0);  // AF_UNSPEC
   v.push_back(0);
-  put16(v, 0);      // device type: unchanged
+  put16(v, 0);  // device type: unchanged
   put32(v, static_cast<uint32_t>(index));
   put32(v, flags);
   put32(v, change);
@@ -56,7 +56,7 @@ TEST(LinkConfig, TheBitRateIsACanLinksBitTimingWithOnlyTheRateGiven) {
   put16(want, 2);
   put16(want, 36);  // IFLA_CAN_BITTIMING: 4 + 32
   put16(want, 1);
-  put32(want, 250'000);  // bitrate
+  put32(want, 250'000);                        // bitrate
   for (int i = 0; i < 7; ++i) put32(want, 0);  // sample point, tq, segments, sjw, brp: the kernel's
   EXPECT_EQ(bit_rate_request(3, 250'000, 2), want);
 }

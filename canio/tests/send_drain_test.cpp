@@ -52,7 +52,8 @@ TEST_F(SendDrainTest, ABlockedQueueCostsNoWakeUpsAndDrainsWhenThePeerReads) {
   EventLoop loop;
   int flushes_after = 0;
   loop.watch(fds[0], [] {});
-  SendDrain drain(loop, fds[0], [this] { return flush(); }, [&] { ++flushes_after; });
+  SendDrain drain(
+      loop, fds[0], [this] { return flush(); }, [&] { ++flushes_after; });
   queued = 1000;  // far more than a datagram socket queues
   ASSERT_FALSE(flush()) << "the peer's queue is full";
   const int blocked_at = queued;
@@ -81,10 +82,13 @@ TEST_F(SendDrainTest, RefusedWhileWritableFallsBackToThePoll) {
   loop.watch(fds[0], [] {});
   int writable_calls = 0;
   // A kernel that refuses (ENOBUFS) though the socket has room.
-  SendDrain drain(loop, fds[0], [&] {
-    ++writable_calls;
-    return false;
-  }, [] {});
+  SendDrain drain(
+      loop, fds[0],
+      [&] {
+        ++writable_calls;
+        return false;
+      },
+      [] {});
   drain.update(true);
   int ticks = 0;
   loop.every(1000, [&] {
