@@ -18,6 +18,23 @@ def config(tmp_path, name, text):
     return str(p)
 
 
+def give_another_node_id(master, node, serial, new_id):
+    """The one node without a node-ID (it gave its own up) is found by a CiA 305 fast scan
+    and given `new_id`; it boots with it."""
+    bus = open_bus()
+    try:
+        lss = LssMaster(bus)
+        assert lss.identify_non_configured() == 1
+        addr = lss.fast_scan()
+        assert addr is not None and addr.serial_number == serial
+        assert lss.configure_node_id(new_id) == 0
+        master.flush()
+        lss.switch_state_global(MODE_WAITING)
+    finally:
+        bus.shutdown()
+    assert master.wait_bootup(new_id, timeout=5.0) is not None, node.log()
+
+
 def test_self_start_enters_operational_after_boot_up(master, start_node, tmp_path):
     node_id = 0x21
     start_node(node_id, ["--config", config(tmp_path, "self.toml", "self_start = true\n")])
@@ -73,18 +90,7 @@ def test_a_second_node_with_the_same_id_yields_it(master, start_node):
     assert "already used by another device" in second.log()
 
     # The one that yielded waits for LSS; a master gives it 0x25.
-    bus = open_bus()
-    try:
-        lss = LssMaster(bus)
-        assert lss.identify_non_configured() == 1
-        addr = lss.fast_scan()
-        assert addr is not None and addr.serial_number == 0x12
-        assert lss.configure_node_id(0x25) == 0
-        master.flush()
-        lss.switch_state_global(MODE_WAITING)
-    finally:
-        bus.shutdown()
-    assert master.wait_bootup(0x25, timeout=5.0) is not None, second.log()
+    give_another_node_id(master, second, 0x12, 0x25)
     assert master.read_u32(0x25, 0x1018, 4) == 0x12
     assert master.read_u32(node_id, 0x1018, 4) == 0x11
 
@@ -105,18 +111,7 @@ def test_a_node_that_listens_before_boot_up_refuses_a_node_id_in_use(master, sta
     assert second.alive
     assert "heard before boot-up" in second.log(), second.log()
 
-    bus = open_bus()
-    try:
-        lss = LssMaster(bus)
-        assert lss.identify_non_configured() == 1
-        addr = lss.fast_scan()
-        assert addr is not None and addr.serial_number == 0x22
-        assert lss.configure_node_id(0x27) == 0
-        master.flush()
-        lss.switch_state_global(MODE_WAITING)
-    finally:
-        bus.shutdown()
-    assert master.wait_bootup(0x27, timeout=5.0) is not None, second.log()
+    give_another_node_id(master, second, 0x22, 0x27)
     assert master.read_u32(0x27, 0x1018, 4) == 0x22
 
 
