@@ -85,6 +85,7 @@ SocketCan::~SocketCan() {
 
 void SocketCan::set_filters(const std::vector<Filter>& filters) {
   std::vector<can_filter> f;
+  f.reserve(filters.size());
   // CAN_EFF_FLAG in the mask with it clear in the id: 11-bit frames only. CAN_RTR_FLAG in
   // the mask: data frames only. An exact 11-bit data-frame filter (mask 0x7FF with both
   // flags) is the kernel's fast case, a table lookup by identifier.

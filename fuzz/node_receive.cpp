@@ -74,8 +74,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     n.sent.clear();
     switch (op >> 4) {
       case 1: n.frame(frame_with(in.u16(), in)); break;
-      case 2: n.advance_us((in.u8() + 1u) * 1000u); break;
-      case 3: n.now_us += in.u8() * 10u; break;
+      case 2: n.advance_us(uint64_t{in.u8() + 1u} * 1000u); break;
+      case 3: n.now_us += uint64_t{in.u8()} * 10u; break;
       case 4: n.device().on_bus_event(static_cast<node::BusEvent>(in.u8() % 7), n.now_us); break;
       case 5:
         overruns += in.u8();

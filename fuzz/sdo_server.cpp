@@ -103,7 +103,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::vector<od::Bytes> before = snapshot(d);
     switch ((op >> 4) & 3) {
       case 2:
-        now_us += in.u8() * 10'000u;
+        now_us += uint64_t{in.u8()} * 10'000u;
         server.on_tick(now_us, out);
         check_changes(d, before, nullptr, out);
         break;

@@ -46,6 +46,9 @@ uint64_t clock_ns() {
   return static_cast<uint64_t>(ts.tv_sec) * 1'000'000'000u + static_cast<uint64_t>(ts.tv_nsec);
 }
 
+// The device's time: the same monotonic clock, in the microseconds its services take.
+uint64_t now_us() { return clock_ns() / 1000; }
+
 // User-space instructions of this thread (perf events); absent where the CPU or the
 // container gives none.
 class InstructionCounter {
@@ -86,7 +89,6 @@ struct Bench {
           ++frames_sent;
           if (f.id == watch_id && !answered_ns) answered_ns = clock_ns();
         }) {}
-  static uint64_t now_us() { return clock_ns() / 1000; }
   void tick() { device.on_tick(now_us()); }
   void write(uint16_t index, uint8_t sub, od::Bytes v) {
     if (device.dictionary().write(index, sub, v) != od::SdoAbort::None) {
@@ -133,8 +135,8 @@ void print(const char* what, const Figures& f, bool instructions) {
 }
 
 void pause_ticking(Bench& b, uint64_t us) {
-  const uint64_t end = b.now_us() + us;
-  while (b.now_us() < end) b.tick();
+  const uint64_t end = now_us() + us;
+  while (now_us() < end) b.tick();
 }
 
 node::NodeOptions options() {
@@ -283,8 +285,8 @@ int main(int argc, char** argv) {
   const InstructionCounter ic;
   if (cia402) return cia402_latency(iterations, ic);
   Bench b(options());
-  b.device.start(b.now_us());
-  b.device.on_frame(od::CanFrame(0, {0x01, kId}), b.now_us());  // NMT start
+  b.device.start(now_us());
+  b.device.on_frame(od::CanFrame(0, {0x01, kId}), now_us());  // NMT start
   prepare_axis(b);
   b.write(0x1800, 2, {1});  // TPDO1 (axis 1 status and position): synchronous, every SYNC
   b.device.machine().axes.at(0).trace_into(&b.steps);
@@ -298,12 +300,11 @@ int main(int argc, char** argv) {
     pause_ticking(b, 200);
     // Move Relative by +1 (RPDO1: command bits, destination); the edge acts, then released.
     const size_t before = b.steps.size();
-    const uint64_t frame_us = b.now_us();
+    const uint64_t frame_us = now_us();
     timed(b, ic, od::CanFrame(0x200 + kId, {0x80, 0x00, 1, 0, 0, 0}), 0, rpdo);
     if (b.steps.size() > before) ++first_step_in_handler;
-    b.device.on_frame(od::CanFrame(0x200 + kId, {0x00, 0x00, 1, 0, 0, 0}), b.now_us());
-    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;)
-      b.tick();
+    b.device.on_frame(od::CanFrame(0x200 + kId, {0x00, 0x00, 1, 0, 0, 0}), now_us());
+    for (uint64_t end = now_us() + 100'000; b.steps.size() == before && now_us() < end;) b.tick();
     if (b.steps.size() >
         before)  // the step's own time on the node's clock, after the RPDO was handed over
       first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -

@@ -17,7 +17,7 @@ namespace stepnode::bridge::test {
 
 class TestBus {
  public:
-  explicit TestBus(ObserverConfig config = {}) : observer(sink, config) {}
+  explicit TestBus(const ObserverConfig& config = {}) : observer(sink, config) {}
 
   struct Beat {
     FakeNode* node;
