@@ -210,8 +210,8 @@ constexpr uint32_t kAcceleration = 10'000'000;  // steps/s^2, 6083h and 6084h
 // control: shutdown 06h, switch on 07h, enable operation 0Fh), PP, both TPDOs synchronous.
 void prepare_drive(Bench& b) {
   namespace o = cia402::obj;
-  b.device.start(b.now_us());
-  b.device.on_frame(od::CanFrame(0, {0x01, kId}), b.now_us());  // NMT start
+  b.device.start(now_us());
+  b.device.on_frame(od::CanFrame(0, {0x01, kId}), now_us());  // NMT start
   b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
   b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
   b.write(0x1800, 2, {1});
@@ -220,7 +220,7 @@ void prepare_drive(Bench& b) {
   b.write(o::kProfileAcceleration, 0, od::encode<uint32_t>(kAcceleration));
   b.write(o::kProfileDeceleration, 0, od::encode<uint32_t>(kAcceleration));
   for (uint16_t cw : {0x06, 0x07, 0x0F}) {
-    b.device.on_frame(controlword_rpdo(cw, 1), b.now_us());
+    b.device.on_frame(controlword_rpdo(cw, 1), now_us());
     pause_ticking(b, 2000);
   }
   const auto sw = b.device.dictionary().get<uint16_t>(o::kStatusword, 0);
@@ -242,15 +242,15 @@ int cia402_latency(unsigned iterations, const InstructionCounter& ic) {
   for (unsigned i = 0; i < iterations; ++i) {
     pause_ticking(b, 200);
     timed(b, ic, od::CanFrame(0x80, {}), 0x280 + kId, sync);
-    b.device.on_frame(target_rpdo(10), b.now_us());  // 10 steps on
+    b.device.on_frame(target_rpdo(10), now_us());  // 10 steps on
     pause_ticking(b, 200);
     const size_t before = b.steps.size();
-    const uint64_t frame_us = b.now_us();
+    const uint64_t frame_us = now_us();
     // Enable operation + new set-point (bit 4) + relative (bit 6); then bit 4 released.
     timed(b, ic, controlword_rpdo(0x5F, 1), 0, controlword);
     if (b.steps.size() > before) ++in_handler;
-    b.device.on_frame(controlword_rpdo(0x4F, 1), b.now_us());
-    for (uint64_t end = b.now_us() + 100'000; b.steps.size() == before && b.now_us() < end;)
+    b.device.on_frame(controlword_rpdo(0x4F, 1), now_us());
+    for (uint64_t end = now_us() + 100'000; b.steps.size() == before && now_us() < end;)
       b.tick();
     if (b.steps.size() > before)
       first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -
