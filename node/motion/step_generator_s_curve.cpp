@@ -105,7 +105,8 @@ void StepGenerator::leave_s_curve(Tick at) {
 double StepGenerator::steps_to_stop() const {
   if (phase_ == MotionPhase::Idle) return 0;
   if (scurve_) return s_.p->steps_to_stop(t_);
-  const int64_t levels = ramp_.decel_phase(level_) / ramp_.phase_per_step;  // whole levels
+  const auto levels =  // the ramp down's whole steps, far inside int64
+      static_cast<int64_t>(ramp_.decel_phase(level_) / ramp_.phase_per_step);
   return static_cast<double>(levels);
 }
 
