@@ -250,8 +250,7 @@ int cia402_latency(unsigned iterations, const InstructionCounter& ic) {
     timed(b, ic, controlword_rpdo(0x5F, 1), 0, controlword);
     if (b.steps.size() > before) ++in_handler;
     b.device.on_frame(controlword_rpdo(0x4F, 1), now_us());
-    for (uint64_t end = now_us() + 100'000; b.steps.size() == before && now_us() < end;)
-      b.tick();
+    for (uint64_t end = now_us() + 100'000; b.steps.size() == before && now_us() < end;) b.tick();
     if (b.steps.size() > before)
       first_step.us.push_back(static_cast<double>(b.device.axes().micros(b.steps[before].time)) -
                               static_cast<double>(frame_us));
