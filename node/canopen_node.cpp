@@ -150,12 +150,19 @@ void CanopenNode::install_service_hooks() {
 }
 
 void CanopenNode::start(uint64_t now_us) {
-  if (auto index = lss_.active_bit_timing())
-    spdlog::info(
-        "LSS: stored bit timing {} kbit/s (table index {}); stepnode does not set the interface's "
-        "bit "
-        "rate: `tools/lss-bit-timing {} IFACE` compares it and applies it with ip link",
-        *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
+  if (auto index = lss_.active_bit_timing()) {
+    if (options_.activate_bit_timing)
+      spdlog::info(
+          "LSS: stored bit timing {} kbit/s (table index {}); the node applies it "
+          "(--apply-bit-timing)",
+          *lss::bit_rate_kbit(*index), *index);
+    else
+      spdlog::info(
+          "LSS: stored bit timing {} kbit/s (table index {}); without --apply-bit-timing stepnode "
+          "does not set the interface's bit rate: `tools/lss-bit-timing {} IFACE` compares it "
+          "and applies it with ip link",
+          *lss::bit_rate_kbit(*index), *index, options_.state_dir.string());
+  }
   if (configured() && options_.boot_listen_us > 0) {
     spdlog::info("listening {} ms for another device with node-ID {} before the boot-up",
                  options_.boot_listen_us / 1000, node_id());
