@@ -147,12 +147,15 @@ node::NodeOptions options() {
   return o;
 }
 
-void prepare_axis(Bench& b) {
-  using namespace horner::obj;
-  od::Dictionary& od = b.device.dictionary();
-  (void)od;
+// Axis 1 of the simulated machine without limit switches: the moves run anywhere.
+void limit_switches_off(Bench& b) {
   b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
   b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
+}
+
+void prepare_axis(Bench& b) {
+  using namespace horner::obj;
+  limit_switches_off(b);
   b.write(index(0, kCommandBits), 0, od::encode<uint16_t>(horner::command::kClearErrors));
   b.write(index(0, kCommandBits), 0, od::encode<uint16_t>(0));
 }
@@ -212,8 +215,7 @@ void prepare_drive(Bench& b) {
   namespace o = cia402::obj;
   b.device.start(now_us());
   b.device.on_frame(od::CanFrame(0, {0x01, kId}), now_us());  // NMT start
-  b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kLowerLimitEnabled, {0});
-  b.write(sim::obj::index(0, sim::obj::kSwitches), sim::switches_sub::kUpperLimitEnabled, {0});
+  limit_switches_off(b);
   b.write(0x1800, 2, {1});
   b.write(0x1801, 2, {1});
   b.write(o::kProfileVelocity, 0, od::encode<uint32_t>(100'000));
