@@ -112,7 +112,7 @@ class SCurve {
     double x = 0, w = 1, dw = 0;  // the last crossing - tau, the last interval, its change
   };
   std::optional<Tick> quick();
-  int try_step(const Local& l, const Segment& g, Tick d, Local& n) const;
+  static int try_step(const Local& l, const Segment& g, Tick d, Local& n);
   void seat_local(Tick prev);
 
   JerkLimits limits_;

@@ -23,7 +23,7 @@ constexpr double kSd = static_cast<double>(kS);
 
 }  // namespace
 
-int SCurve::try_step(const Local& l, const Segment& g, Tick d, Local& n) const {
+int SCurve::try_step(const Local& l, const Segment& g, Tick d, Local& n) {
   // d against the exact cubic: -1 the step lies beyond, +1 before, 0 it is d (n the cubic
   // moved to tau + d). Unsigned: the same products modulo 2^128, without sign extensions.
   using U = unsigned __int128;
