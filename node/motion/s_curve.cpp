@@ -104,6 +104,7 @@ void SCurve::add_position_goal(Tick t, State s, int64_t distance, double vp) {
 void SCurve::replan(Tick at, std::optional<int64_t> distance, double velocity,
                     std::optional<double> decel) {
   peeked_.reset();
+  local_[cur_].seg = -1;  // the segments change: the next step by the full search
   const State now = state_at(at);
   const double v0 = static_cast<double>(now.v) / kV, a0 = static_cast<double>(now.a) / kA;
   count_ = seg_ = 0;

@@ -6,10 +6,13 @@
 // by S = 6 T^3 (T = kClockHz): S p(τ) = c0 + c1 τ + c2 τ^2 + c3 τ^3 with c1 = 6 T^2 v,
 // c2 = 3 T a, c3 = j (steps, steps/s, steps/s^2, steps/s^3). Step n falls on the first tick
 // at which S p reaches n S: a double-precision Newton estimate, checked and corrected
-// with the exact integers. Position and velocity are continuous; at a segment end the
-// acceleration may jump by less than one tick of jerk (the phases are whole ticks long).
-// A move to a target is planned backwards from the target (its ramp down ends there with
-// v = 0 exactly), forwards from where the motion is; a cruise joins the two.
+// with the exact integers. From one step to the next the cubic is kept moved to the last
+// step's tick (s_curve_local.cpp), so a step costs a short Newton solve and two exact
+// evaluations of a cubic at a small offset; the full search takes over where that does
+// not decide (a segment's end, a replan, an estimate more than a tick off). Position and velocity
+// are continuous; at a segment end the acceleration may jump by less than one tick of jerk (the
+// phases are whole ticks long). A move to a target is planned backwards from the target (its ramp
+// down ends there with v = 0 exactly), forwards from where the motion is; a cruise joins the two.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -37,7 +40,13 @@ class SCurve {
   void start(const JerkLimits& limits, Tick start, std::optional<int64_t> distance);
   // The next step's tick after the last one; nullopt when the motion has ended (end()).
   std::optional<Tick> next_step();
-  std::optional<Tick> peek();
+  std::optional<Tick> peek() {
+    if (!peeked_) peeked_ = search().value_or(-1);
+    return *peeked_ < 0 ? std::nullopt : peeked_;
+  }
+  // For tests: every step by the full search (the reference the quick one must equal).
+  void use_full_search() { full_search_only_ = true; }
+  int64_t quick_steps() const { return quick_steps_; }  // steps the quick search found
   // From `at`: ramp to velocity 0 and end (deceleration `decel`, or the limits' one).
   void stop(Tick at, std::optional<double> decel = std::nullopt);
   // From `at`: a new cruise velocity (a move keeps its target), or a new target
@@ -51,8 +60,10 @@ class SCurve {
   std::optional<int64_t> distance() const { return distance_; }
   // At the last step (or change): the velocity in steps/s and what the motion does.
   double velocity() const { return velocity_; }
-  Kind kind() const;
-  bool at_target_velocity() const;  // a velocity motion holds its velocity
+  Kind kind() const { return seg_ < count_ ? segs_[seg_].kind : Kind::Hold; }
+  bool at_target_velocity() const {  // a velocity motion holds its velocity
+    return !ended_ && hold_velocity_ >= 0 && kind() == Kind::Hold;
+  }
   double target_velocity() const { return hold_velocity_; }
   // Steps from here to standstill with the deceleration ramp (the motion stops there).
   double steps_to_stop(Tick at) const;
@@ -87,6 +98,22 @@ class SCurve {
   void add_open(Tick t, const State& s, Kind kind);
   static Tick find(const Segment& g, Tick lo, __int128 target);
   std::optional<Tick> compute(int& k) const;
+  std::optional<Tick> search();
+  // The quick search (s_curve_local.cpp): the cubic of the last step's segment moved to
+  // its tick, S p(tau + d) = S p(tau) + d (b1 + d (b2 + d c3)), exact in the integers, and
+  // in doubles for Newton (kept up by the same shifts).
+  struct Local {
+    int seg = -1;             // its segment; -1: none (the full search finds the next step)
+    Tick tau = 0;             // the last step's tick in that segment
+    __int128 gap = 0;         // (steps + 1) S - S p(tau): the next step's distance, > 0
+    __int128 b1 = 0, b2 = 0;  // S dp/dtau, S d2p/dtau2 / 2 at tau
+    __int128 left = 0;        // S p at the segment's end - S p(tau) (open: far above)
+    double b1d = 0, b2d = 0, gapd = 0;
+    double x = 0, w = 1, dw = 0;  // the last crossing - tau, the last interval, its change
+  };
+  std::optional<Tick> quick();
+  static int try_step(const Local& l, const Segment& g, Tick d, Local& n);
+  void seat_local(Tick prev);
 
   JerkLimits limits_;
   std::array<Segment, kMaxSegments> segs_{};
@@ -100,6 +127,11 @@ class SCurve {
   Tick end_ = 0;
   std::optional<Tick> peeked_;
   int peeked_seg_ = 0;
+  std::array<Local, 2> local_{};  // at the last step, and after peek()'s quick one
+  int cur_ = 0;                   // local_[cur_] is the last step's
+  bool pending_quick_ = false;    // peek()'s step is local_[cur_ ^ 1]'s
+  bool full_search_only_ = false;
+  int64_t quick_steps_ = 0;
 };
 
 }  // namespace stepnode::motion

@@ -3,21 +3,13 @@
 #include <cmath>
 
 #include "node/motion/s_curve.hpp"
+#include "node/motion/s_curve_scale.hpp"
 
 namespace stepnode::motion {
-namespace {
-
-constexpr __int128 kS = static_cast<__int128>(6) * kClockHz * kClockHz * kClockHz;
-constexpr double kV = 6.0 * static_cast<double>(kClockHz) * static_cast<double>(kClockHz);
-
-// An estimate of a large integer in a double without the library's exact conversion
-// (|x| < 2^95 here: positions and velocities of the scale S).
-double approx(__int128 x) {
-  return static_cast<double>(static_cast<int64_t>(x >> 32)) * 4294967296.0 +
-         static_cast<double>(static_cast<uint32_t>(x));
-}
-
-}  // namespace
+using scurve::approx;
+using scurve::kS;
+using scurve::kV;
+using scurve::to_double;
 
 Tick SCurve::find(const Segment& g, Tick lo, __int128 target) {
   // The smallest tau in (lo, g.len] with g.at(tau) >= target, given g.at(lo) < target (the
@@ -70,13 +62,15 @@ std::optional<Tick> SCurve::compute(int& k) const {
   return std::nullopt;
 }
 
-std::optional<Tick> SCurve::peek() {
-  if (!peeked_) {
-    peeked_seg_ = seg_;
-    const std::optional<Tick> t = compute(peeked_seg_);
-    peeked_ = t.value_or(-1);
+std::optional<Tick> SCurve::search() {
+  // The quick search where it decides; the full one otherwise (a step in another segment,
+  // the first after a start or replan, an estimate that missed).
+  if (!full_search_only_) {
+    if (const std::optional<Tick> t = quick()) return t;
   }
-  return *peeked_ < 0 ? std::nullopt : peeked_;
+  pending_quick_ = false;
+  peeked_seg_ = seg_;
+  return compute(peeked_seg_);
 }
 
 std::optional<Tick> SCurve::next_step() {
@@ -88,22 +82,22 @@ std::optional<Tick> SCurve::next_step() {
     velocity_ = 0;
     return std::nullopt;
   }
+  const Tick prev = last_;
   seg_ = peeked_seg_;
   last_ = *t;
   ++steps_;
-  const Segment& g = segs_[seg_];
-  velocity_ = static_cast<double>(g.slope(*t - g.start)) / kV;
+  if (pending_quick_) {
+    cur_ ^= 1;
+    ++quick_steps_;
+  } else {
+    seat_local(prev);
+  }
+  velocity_ = to_double(local_[cur_].b1) / kV;  // b1 is the exact slope at this tick
   if (distance_ && steps_ >= *distance_) {
     ended_ = true;
     end_ = last_;
   }
   return t;
-}
-
-SCurve::Kind SCurve::kind() const { return seg_ < count_ ? segs_[seg_].kind : Kind::Hold; }
-
-bool SCurve::at_target_velocity() const {
-  return !ended_ && hold_velocity_ >= 0 && kind() == Kind::Hold;
 }
 
 }  // namespace stepnode::motion

@@ -7,6 +7,18 @@
 #include "node/motion/step_generator.hpp"
 
 namespace stepnode::motion {
+namespace {
+
+// max(0, llround(x)) without the library call (once per step): half away from zero, the
+// fraction of a double below 2^52 is exact.
+int64_t level_of(double x) {
+  if (!(x > 0)) return 0;
+  if (x >= 0x1p52) return std::llround(x);
+  const auto whole = static_cast<int64_t>(x);
+  return whole + (x - static_cast<double>(whole) >= 0.5 ? 1 : 0);
+}
+
+}  // namespace
 
 double StepGenerator::slope_of(Rational z) const {
   // Ticks per level on this grid -> steps/s^2: kClockHz^2 / (z * phase_per_step).
@@ -63,7 +75,7 @@ void StepGenerator::s_follow() {
   // Holding a velocity: exactly its level (the phases on whole ticks leave it within a few
   // millionths); otherwise the velocity at the last step.
   const double v = s.at_target_velocity() ? s.target_velocity() : s.velocity();
-  level_ = std::max<int64_t>(0, std::llround(v * lph));
+  level_ = level_of(v * lph);
   marks_.peak_level = std::max(marks_.peak_level, level_);
 }
 

@@ -1,0 +1,103 @@
+// The S-curve's quick step search against its full search (SCurve::use_full_search: the
+// Newton estimate and exact check of a fresh cubic evaluation per step, as every step was
+// found before the quick search): over random moves and velocity motions, with stops,
+// velocity changes and new targets in the middle, every step must fall on the same tick.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "node/motion/s_curve.hpp"
+
+namespace stepnode::motion {
+namespace {
+
+struct Pair {
+  SCurve quick, full;
+};
+
+JerkLimits random_limits(std::mt19937_64& rng) {
+  auto log_uniform = [&](double lo, double hi) {
+    return lo * std::pow(hi / lo, std::uniform_real_distribution<double>(0, 1)(rng));
+  };
+  auto jerk = [&]() -> uint32_t {
+    if (rng() % 8 == 0) return 0;  // not limited
+    return static_cast<uint32_t>(log_uniform(1e3, 4e9));
+  };
+  JerkLimits l;
+  l.velocity = log_uniform(1, 60'000);
+  l.acceleration = log_uniform(10, 2e6);
+  l.deceleration = log_uniform(10, 2e6);
+  l.begin_accel_jerk = jerk();
+  l.end_accel_jerk = jerk();
+  l.begin_decel_jerk = jerk();
+  l.end_decel_jerk = jerk();
+  return l;
+}
+
+// A change at a tick between the last step and the next (as a drive gives it).
+void random_change(std::mt19937_64& rng, Pair& p, Tick last, const JerkLimits& l) {
+  const std::optional<Tick> next = p.full.peek();
+  const Tick room = next ? std::max<Tick>(0, *next - 1 - last) : 1000;
+  const Tick at = last + static_cast<Tick>(rng() % static_cast<uint64_t>(room + 1));
+  switch (rng() % 4) {
+    case 0: {
+      const std::optional<double> decel =
+          rng() % 2 ? std::optional<double>(l.deceleration * 3) : std::nullopt;
+      p.quick.stop(at, decel);
+      p.full.stop(at, decel);
+      break;
+    }
+    case 1: {
+      const double v = l.velocity * std::uniform_real_distribution<double>(0.1, 2)(rng);
+      p.quick.change_velocity(at, v);
+      p.full.change_velocity(at, v);
+      break;
+    }
+    default: {
+      const int64_t to = p.full.steps() + 1 + static_cast<int64_t>(rng() % 3000);
+      p.quick.retarget(at, to);
+      p.full.retarget(at, to);
+      break;
+    }
+  }
+}
+
+TEST(SCurveProperty, QuickSearchEqualsTheFullSearchOnEveryStep) {
+  std::mt19937_64 rng(20240613);
+  int64_t steps = 0, quick = 0;
+  for (int move = 0; move < 300; ++move) {
+    const JerkLimits l = random_limits(rng);
+    const bool to_target = rng() % 3 != 0;
+    const std::optional<int64_t> distance =
+        to_target ? std::optional<int64_t>(1 + static_cast<int64_t>(rng() % 6000)) : std::nullopt;
+    Pair p;
+    p.full.use_full_search();
+    const Tick start = static_cast<Tick>(rng() % 100'000);
+    p.quick.start(l, start, distance);
+    p.full.start(l, start, distance);
+    // Up to two changes, each at a random step; a velocity motion is stopped by 8000 steps.
+    int64_t change_at[2] = {static_cast<int64_t>(rng() % 4000), static_cast<int64_t>(rng() % 8000)};
+    if (rng() % 3 == 0) change_at[0] = change_at[1] = -1;
+    Tick last = start;
+    for (int64_t n = 0; n < 20'000; ++n) {
+      if (n == change_at[0] || n == change_at[1]) random_change(rng, p, last, l);
+      if (!distance && n == 8000) p.full.stop(last), p.quick.stop(last);
+      const std::optional<Tick> a = p.quick.next_step(), b = p.full.next_step();
+      ASSERT_EQ(a, b) << "move " << move << " step " << n + 1;
+      ASSERT_EQ(p.quick.velocity(), p.full.velocity()) << "move " << move << " step " << n + 1;
+      if (!a) break;
+      ASSERT_GT(*a, last - (n == 0 ? 1 : 0)) << "move " << move << " step " << n + 1;
+      last = *a;
+      ++steps;
+    }
+    EXPECT_EQ(p.quick.end(), p.full.end()) << "move " << move;
+    quick += p.quick.quick_steps();
+  }
+  // The comparison means something only if the quick search found most steps.
+  EXPECT_GT(steps, 300'000);
+  EXPECT_GT(quick, steps * 9 / 10) << quick << " of " << steps;
+}
+
+}  // namespace
+}  // namespace stepnode::motion
