@@ -161,20 +161,22 @@ void Drive::halt(bool on, Tick now) {
 void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
-  const bool limit =
-      step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
-  if (!limit) {
-    // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
-    if (next_ && next_->through && active_ && core_.position() == active_->target)
-      pass_first_target(step.time);
-    return;
-  }
-  core_.halt(*this, step.time);
+  const motion::InputLevels& in = core_.inputs();
+  if (step.direction < 0 ? in.lower_limit() : in.upper_limit()) [[unlikely]]
+    return stop_at_limit(step.time);
+  // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
+  if (next_ && next_->through && active_ && core_.position() == active_->target)
+    pass_first_target(step.time);
+}
+
+// Out of line, so that after_step, every step's rule, stays a leaf.
+[[gnu::noinline]] void Drive::stop_at_limit(Tick at) {
+  core_.halt(*this, at);
   active_.reset();
   next_.reset();
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
-  carry_out(machine_.fault(kReferenceLimit), step.time);
+  carry_out(machine_.fault(kReferenceLimit), at);
 }
 
 void Drive::motion_ended(Tick when) {
