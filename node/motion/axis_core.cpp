@@ -25,6 +25,8 @@ void AxisCore::set_owner(FrontEnd* owner) {
 void AxisCore::update_rounds() {
   direct_steps_ = horizon_ <= 0 && !hooks_.pulse;
   step_rounds_ = owner_ && !waiting_ && !hooks_.deadline && !hooks_.before_step;
+  step_rule_ = owner_ && (hooks_.every_step ||
+                          (selected_motor_->levels.active & hooks_.step_rule_inputs) != 0);
 }
 
 void AxisCore::power_up(Tick now) {
@@ -178,6 +180,7 @@ void AxisCore::read_inputs() {
       for (const Listener& l : listeners_)
         if (l.inputs) l.listener->input_changed(m, edge);
     }
+  update_rounds();  // the owner's step_rule_inputs may be active now, or no longer
 }
 
 bool AxisCore::ramp_ends_later(Tick now) {
@@ -202,7 +205,7 @@ void AxisCore::take_due(Tick now) {
     generator_.next(step);
     take(step);
     if (estop_active()) return emergency_stop(step.time);
-    owner_->after_step(step);
+    if (step_rule_) owner_->after_step(step);
     if (!step_rounds_) return;
   }
 }
@@ -245,7 +248,7 @@ bool AxisCore::round(Tick now) {
     emergency_stop(step.time);
     return true;
   }
-  if (owner_) owner_->after_step(step);
+  if (step_rule_) owner_->after_step(step);
   return true;
 }
 

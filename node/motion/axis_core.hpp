@@ -42,6 +42,12 @@ class FrontEnd {
     bool pulse = false;        // pulse(): the job's steps are output signals
     bool deadline = false;     // deadline()/at_deadline(): a time between steps matters
     bool before_step = false;  // before_step()
+    // after_step() at every step, or (false) only at a step after which one of the inputs
+    // in `step_rule_inputs` (a set of Input bits) is active: a rule that acts only at a
+    // limit switch costs the other steps nothing. A job whose rule comes to need every
+    // step says so (`AxisCore::hooks_changed`).
+    bool every_step = true;
+    uint8_t step_rule_inputs = 0;
   };
   virtual Hooks hooks() const { return {}; }
   // How the job's step leaves the outputs (HP PULSE SD|SS). It may be asked ahead of the
@@ -139,6 +145,12 @@ class AxisCore {
     if (owner_ == &by) waiting_ = false;
     update_rounds();
   }
+  // The owner's hooks() answer changed within its motion (a rule needs every step now).
+  void hooks_changed(const FrontEnd& by) {
+    if (owner_ != &by) return;
+    hooks_ = by.hooks();
+    update_rounds();
+  }
   // The owner gives its job up without a motion_ended (the job ended in its rules).
   void release(const FrontEnd& by);
   // Decelerate whatever runs to the base velocity and stop (any front end may).
@@ -205,6 +217,7 @@ class AxisCore {
   void select(unsigned n) {
     selected_ = n;
     selected_motor_ = &motors_[n];
+    update_rounds();
     step_rounds_ = false;  // a rule's select: the next round looks at this motor's e-stop
   }
 
@@ -264,9 +277,11 @@ class AxisCore {
   // What a step's round needs, worked out when the job, its hooks or the horizon change
   // rather than at every step: a step goes straight to the step sink (horizon 0, no pulse
   // hook); a round has nothing but the step (an owner, no wait, no deadline, no
-  // before_step hook).
+  // before_step hook); the owner's after_step is called (every_step, or an input of its
+  // step_rule_inputs active).
   bool direct_steps_ = true;
   bool step_rounds_ = false;
+  bool step_rule_ = false;
 };
 
 }  // namespace stepnode::motion

@@ -2,8 +2,11 @@
 // can make matter (axis_core.cpp: take_due). A rule that changes the job from after_step
 // must still be obeyed from the very next step: a select of another motor whose e-stop is
 // active (SPM30 3.3.1: no step goes out once the selected motor's e-stop is), and a next
-// motion whose hooks differ.
+// motion whose hooks differ. And a rule that asks for steps only at some inputs
+// (FrontEnd::Hooks::step_rule_inputs) is called at exactly those steps.
 #include <gtest/gtest.h>
+
+#include <vector>
 
 #include "node/motion/axis.hpp"
 #include "node/motion/axis_core.hpp"
@@ -73,6 +76,40 @@ TEST(AxisCoreRounds, ANextMotionStartedInARuleHasItsHooksFromItsFirstStep) {
   EXPECT_EQ(fe.before, 5);  // every step of the second motion, none of the first
   EXPECT_EQ(m.position(), 8);
   EXPECT_FALSE(core.busy());
+}
+
+// A rule that acts only at the upper limit, until it asks for every step.
+struct LimitRule final : FrontEnd {
+  AxisCore* core = nullptr;
+  bool every = false;
+  std::vector<int32_t> seen;  // the core's position at each after_step
+  Hooks hooks() const override {
+    return {.every_step = every, .step_rule_inputs = static_cast<uint8_t>(Input::UpperLimit)};
+  }
+  void after_step(const Step&) override { seen.push_back(core->position()); }
+  void motion_ended(Tick) override {}
+};
+
+TEST(AxisCoreRounds, ARuleOfTheLimitsIsCalledOnlyAtTheStepsWithTheLimitActive) {
+  sim::AxisMachineConfig c;
+  c.upper_limit = 5;  // active at and above 5 (the steps to 5, 6 and 7)
+  sim::AxisMachine m(c);
+  AxisCore core({&m});
+  LimitRule fe;
+  fe.core = &core;
+  ASSERT_TRUE(core.start(fe, constant(1000), +1, 7, 0));
+  core.advance_to(kClockHz);
+  EXPECT_EQ(fe.seen, (std::vector<int32_t>{5, 6, 7}));
+
+  // Back down from 7 to 1: active at 6 and 5, released at 4. Half-way the rule asks for
+  // every step (hooks_changed): from then on each step is its.
+  fe.seen.clear();
+  ASSERT_TRUE(core.start(fe, constant(1000), -1, 6, kClockHz));
+  core.advance_to(kClockHz + 3 * kClockHz / 1000 + kClockHz / 2000);  // 3 steps: to 4
+  fe.every = true;
+  core.hooks_changed(fe);
+  core.advance_to(2 * kClockHz);
+  EXPECT_EQ(fe.seen, (std::vector<int32_t>{6, 5, 3, 2, 1}));
 }
 
 }  // namespace

@@ -139,6 +139,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   std::function<void()> on_status_changed;
 
   // FrontEnd: this drive's jobs.
+  Hooks hooks() const override;
   void after_step(const motion::Step& step) override;
   void motion_ended(motion::Tick when) override;
   void aborted(motion::Tick when) override;
