@@ -173,14 +173,16 @@ void AxisCore::after_take(const Step& step) {
 
 void AxisCore::read_inputs() {
   InputEdge edge;
+  bool any = false;
   for (unsigned m = 0; m < motors_.size(); ++m)
     while (motors_[m].port->edges_waiting() && motors_[m].port->next_edge(edge)) {
+      any = true;
       motors_[m].levels.set(edge.input, edge.active);
       if (input_watchers_ == 0) continue;
       for (const Listener& l : listeners_)
         if (l.inputs) l.listener->input_changed(m, edge);
     }
-  update_rounds();  // the owner's step_rule_inputs may be active now, or no longer
+  if (any) update_rounds();  // the owner's step_rule_inputs may be active now, or no longer
 }
 
 bool AxisCore::ramp_ends_later(Tick now) {
