@@ -12,7 +12,7 @@ constexpr Tick kNever = std::numeric_limits<Tick>::max();  // later than any `no
 AxisCore::AxisCore(const std::vector<MotorPort*>& motors) {
   if (motors.empty()) throw std::invalid_argument("an axis needs at least one motor");
   for (MotorPort* m : motors) motors_.push_back({m, m->levels()});
-  selected_motor_ = &motors_[0];
+  selected_motor_ = motors_.data();
 }
 
 void AxisCore::set_owner(FrontEnd* owner) {
