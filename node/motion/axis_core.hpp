@@ -42,6 +42,12 @@ class FrontEnd {
     bool pulse = false;        // pulse(): the job's steps are output signals
     bool deadline = false;     // deadline()/at_deadline(): a time between steps matters
     bool before_step = false;  // before_step()
+    // after_step() at every step, or (false) only at a step after which one of the inputs
+    // in `step_rule_inputs` (a set of Input bits) is active: a rule that acts only at a
+    // limit switch costs the other steps nothing. A job whose rule comes to need every
+    // step says so (`AxisCore::hooks_changed`).
+    bool every_step = true;
+    uint8_t step_rule_inputs = 0;
   };
   virtual Hooks hooks() const { return {}; }
   // How the job's step leaves the outputs (HP PULSE SD|SS). It may be asked ahead of the
@@ -108,6 +114,9 @@ class AxisCore {
   // `motors`: one, or three for an SPM30 multiplexed axis (one stepped at a time). The
   // e-stop is an input of the motors' ports (the selected motor's is obeyed).
   explicit AxisCore(const std::vector<MotorPort*>& motors);
+  // The core keeps a pointer to its selected motor: it stays where it was made.
+  AxisCore(const AxisCore&) = delete;
+  AxisCore& operator=(const AxisCore&) = delete;
 
   // Power-up: no job, no motion, position 0, the first motor selected. Owners are not told
   // (every front end has its own power-up).
@@ -134,6 +143,13 @@ class AxisCore {
   // advance.
   void end_wait(const FrontEnd& by) {
     if (owner_ == &by) waiting_ = false;
+    update_rounds();
+  }
+  // The owner's hooks() answer changed within its motion (a rule needs every step now).
+  void hooks_changed(const FrontEnd& by) {
+    if (owner_ != &by) return;
+    hooks_ = by.hooks();
+    update_rounds();
   }
   // The owner gives its job up without a motion_ended (the job ended in its rules).
   void release(const FrontEnd& by);
@@ -187,18 +203,23 @@ class AxisCore {
     if (high != dir_high_) dir_changed_at_ = now;
     dir_high_ = high;
   }
-  bool estop_active() const { return motors_[selected_].levels.emergency_stop(); }
+  bool estop_active() const { return selected_motor_->levels.emergency_stop(); }
 
   // The inputs of the motor stepped and sensed, as of the last edge the core applied (at
   // every step, and at the start of every advance_to); `inputs(n)`: motor n's.
-  const InputLevels& inputs() const { return motors_[selected_].levels; }
+  const InputLevels& inputs() const { return selected_motor_->levels; }
   const InputLevels& inputs(unsigned n) const { return motors_.at(n).levels; }
   // The motor stepped and sensed (SPM30 3.2 SELECT AXIS picks one of three): its encoder.
-  const MotorPort& motor() const { return *motors_[selected_].port; }
+  const MotorPort& motor() const { return *selected_motor_->port; }
   const MotorPort& motor(unsigned n) const { return *motors_.at(n).port; }
   unsigned motors() const { return static_cast<unsigned>(motors_.size()); }
   unsigned selected() const { return selected_; }
-  void select(unsigned n) { selected_ = n; }
+  void select(unsigned n) {
+    selected_ = n;
+    selected_motor_ = &motors_[n];
+    update_rounds();
+    step_rounds_ = false;  // a rule's select: the next round looks at this motor's e-stop
+  }
 
   // `self`: the front end the listener is (its own jobs' steps go to its after_step only).
   void listen(AxisListener& listener, const FrontEnd* self = nullptr) {
@@ -211,10 +232,15 @@ class AxisCore {
 
  private:
   void take(const Step& step);
+  void send(const Step& step);
+  void after_take(const Step& step);
+  void take_due(Tick now);
+  bool round(Tick now);
+  void update_rounds();
   void read_inputs();
   void emergency_stop(Tick now);
   bool ramp_ends_later(Tick now);
-  StepPort& port() { return *motors_[selected_].port; }
+  StepPort& port() { return *selected_motor_->port; }
   // The course changed at `at`: the steps queued after it are taken back and the planner
   // starts again from the core's state.
   void replan(Tick at);
@@ -247,6 +273,15 @@ class AxisCore {
   bool dir_high_ = false;
   Tick dir_changed_at_ = -(Tick{1} << 60);  // long before any motion: DIR has been stable
   unsigned selected_ = 0;
+  Motor* selected_motor_ = nullptr;  // &motors_[selected_]
+  // What a step's round needs, worked out when the job, its hooks or the horizon change
+  // rather than at every step: a step goes straight to the step sink (horizon 0, no pulse
+  // hook); a round has nothing but the step (an owner, no wait, no deadline, no
+  // before_step hook); the owner's after_step is called (every_step, or an input of its
+  // step_rule_inputs active).
+  bool direct_steps_ = true;
+  bool step_rounds_ = false;
+  bool step_rule_ = false;
 };
 
 }  // namespace stepnode::motion

@@ -19,12 +19,7 @@ AxisMachine::AxisMachine(AxisMachineConfig config) : config_(config) {
   reported_ = sensed();
   find_steady_range();
   changed_ = false;
-}
-
-void AxisMachine::step(motion::Tick time, int direction) {
-  const int d = direction >= 0 ? +1 : -1;
-  steps_.went_out(time, d);
-  move(time, d);
+  update_faulty();
 }
 
 void AxisMachine::queue_pulse(motion::Tick time, const motion::OutputPulse& p) {
@@ -50,12 +45,16 @@ void AxisMachine::cancel_after(motion::Tick after) {
   while (!widths_.empty() && widths_.back().time > after) widths_.pop_back();
 }
 
-void AxisMachine::move(motion::Tick time, int direction, uint32_t width_ns) {  // direction: +1 / -1
-  ++pulses_;
-  last_step_time_ = clock_ = time;  // steps come in time order, each after the last flush
-  last_width_ns_ = width_ns;
-  if (tracing_) [[unlikely]]
-    record(time, direction, width_ns);
+void AxisMachine::update_faulty() {
+  faulty_ = config_open_ || !powered_ || config_.miss_every || config_.move_every ||
+            config_.stall_above || config_.stall_below;
+}
+
+void AxisMachine::move_with_faults(motion::Tick time, int direction) {
+  if (config_open_) {  // config() was called: look at the faults again from this step on
+    config_open_ = false;
+    update_faulty();
+  }
   if (!powered_) return;  // no torque: the pulse is lost
   if (config_.miss_every && pulses_ % config_.miss_every == 0) return;  // lost pulse
   if (config_.move_every && pulses_ % config_.move_every != 0) return;  // slipping

@@ -76,7 +76,11 @@ class AxisMachine : public motion::MotorPort {
 
   // One step pulse from the drive at its time (+1 up, -1 down). The motor follows unless
   // stalled or the pulse is one of the missed ones.
-  void step(motion::Tick time, int direction) override;
+  void step(motion::Tick time, int direction) override {
+    const int d = direction >= 0 ? +1 : -1;
+    steps_.went_out(time, d);
+    move(time, d);
+  }
   void step(int direction) { step(clock_, direction); }
   // External force: the load moved without steps.
   void displace(int64_t steps) {
@@ -85,7 +89,10 @@ class AxisMachine : public motion::MotorPort {
   }
   // Motor power (the drive's standby input): an unpowered motor holds no torque, so a
   // pulse it receives moves nothing (HP 44714A STANDBY ON, 3-13).
-  void set_powered(bool powered) { powered_ = powered; }
+  void set_powered(bool powered) {
+    powered_ = powered;
+    update_faulty();
+  }
   bool powered() const { return powered_; }
 
   // --- The inputs (motion::InputPort) ----------------------------------------------
@@ -137,8 +144,11 @@ class AxisMachine : public motion::MotorPort {
   motion::Tick last_step_time() const { return last_step_time_; }
 
   // The configuration; changing it through here is a change of the inputs from outside.
+  // The switches are looked at again at the next input read, the faults at the next step:
+  // the reference is for the change made now, not to keep.
   AxisMachineConfig& config() {
     changed_ = edges_waiting_ = true;
+    faulty_ = config_open_ = true;
     return config_;
   }
   const AxisMachineConfig& config() const { return config_; }
@@ -157,6 +167,10 @@ class AxisMachine : public motion::MotorPort {
   std::vector<TracedStep>* trace_ = nullptr;
   std::vector<TracedPulse>* pulse_trace_ = nullptr;
   bool tracing_ = false;  // either trace: one test per step
+  // A fault that can keep a pulse from moving the motor (no power, a missed or slipping
+  // pulse, a stall), or a configuration not looked at since config(): one test per step.
+  bool faulty_ = false;
+  bool config_open_ = false;
   // The widths of the queued pulses that have one, in time order (a step without a width
   // costs nothing here), and the width of the last pulse that went out.
   struct QueuedWidth {
@@ -172,7 +186,22 @@ class AxisMachine : public motion::MotorPort {
   bool changed_ = true;
   std::deque<motion::InputEdge> edges_;
 
-  void move(motion::Tick time, int direction, uint32_t width_ns = 0);
+  // A pulse that reached the drive (direction +1 / -1); steps come in time order, each
+  // after the last flush. Inline: it is every step's path.
+  void move(motion::Tick time, int direction, uint32_t width_ns = 0) {
+    ++pulses_;
+    last_step_time_ = clock_ = time;
+    last_width_ns_ = width_ns;
+    if (tracing_) [[unlikely]]
+      record(time, direction, width_ns);
+    if (faulty_) [[unlikely]]
+      return move_with_faults(time, direction);
+    position_ += direction;
+    if (position_ < steady_low_ || position_ > steady_high_) [[unlikely]]
+      sense(time);
+  }
+  void move_with_faults(motion::Tick time, int direction);
+  void update_faulty();
   void record(motion::Tick time, int direction, uint32_t width_ns);
   motion::InputLevels sensed() const;
   void sense(motion::Tick time);

@@ -158,23 +158,34 @@ void Drive::halt(bool on, Tick now) {
 
 // ---- the core's events ----------------------------------------------------------------
 
+motion::FrontEnd::Hooks Drive::hooks() const {
+  // after_step's rules: homing's and a queued set-point's (change on set-point) look at
+  // every step; otherwise the one rule is the stop at a limit switch.
+  return {
+      .every_step = homing_ == Homing::InProgress || next_.has_value(),
+      .step_rule_inputs = static_cast<uint8_t>(static_cast<uint8_t>(motion::Input::LowerLimit) |
+                                               static_cast<uint8_t>(motion::Input::UpperLimit))};
+}
+
 void Drive::after_step(const motion::Step& step) {
   if (homing_ == Homing::InProgress) return homing_step(step);
   // A limit switch in the direction of travel: no step goes past it (a fault, 8612h).
-  const bool limit =
-      step.direction < 0 ? core_.inputs().lower_limit() : core_.inputs().upper_limit();
-  if (!limit) {
-    // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
-    if (next_ && next_->through && active_ && core_.position() == active_->target)
-      pass_first_target(step.time);
-    return;
-  }
-  core_.halt(*this, step.time);
+  const motion::InputLevels& in = core_.inputs();
+  if (step.direction < 0 ? in.lower_limit() : in.upper_limit()) [[unlikely]]
+    return stop_at_limit(step.time);
+  // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
+  if (next_ && next_->through && active_ && core_.position() == active_->target)
+    pass_first_target(step.time);
+}
+
+// Out of line, so that after_step, every step's rule, stays a leaf.
+[[gnu::noinline]] void Drive::stop_at_limit(Tick at) {
+  core_.halt(*this, at);
   active_.reset();
   next_.reset();
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
-  carry_out(machine_.fault(kReferenceLimit), step.time);
+  carry_out(machine_.fault(kReferenceLimit), at);
 }
 
 void Drive::motion_ended(Tick when) {

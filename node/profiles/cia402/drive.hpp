@@ -139,6 +139,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   std::function<void()> on_status_changed;
 
   // FrontEnd: this drive's jobs.
+  Hooks hooks() const override;
   void after_step(const motion::Step& step) override;
   void motion_ended(motion::Tick when) override;
   void aborted(motion::Tick when) override;
@@ -160,6 +161,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void start_positioning(const SetPoint& sp, motion::Tick now);
   void run_on_to_next(motion::Tick now);
   void pass_first_target(motion::Tick at);
+  void stop_at_limit(motion::Tick at);  // a limit in the direction of travel (8612h)
   int64_t level_of(uint32_t velocity) const;
   void velocity_to(int64_t target, motion::Tick now);
   void halt(bool on, motion::Tick now);

@@ -49,6 +49,8 @@ void Drive::new_set_point(uint16_t cw, Tick now) {
       return start_positioning(sp, now);
     }
     next_ = sp;  // carried out when the running one is done...
+    // (after_step looks at every step while a set-point is queued: Drive::hooks)
+    core_.hooks_changed(*this);
     if (cw & cw_pp::kChangeOnSetPoint) run_on_to_next(now);  // ...or on from its target
     return;
   }
