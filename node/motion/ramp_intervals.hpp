@@ -27,18 +27,18 @@ class IntervalCursor {
   bool at(Rational z, int64_t k) const { return k == k_ && z.num == z_.num && z.den == z_.den; }
   // The length of the interval after the last one given (same Z).
   Tick next_length() {
-    rem_ += g_.rho;
-    const bool carry = rem_ >= g_.den;
-    rem_ -= carry ? g_.den : 0;
+    rem_ += rho_;
+    const bool carry = rem_ >= z_.den;
+    rem_ -= carry ? z_.den : 0;
     ++k_;
-    return g_.q + (carry ? 1 : 0);
+    return q_ + (carry ? 1 : 0);
   }
   // After a length of 0 (a slope steeper than one level per tick: Z < 1), how many of the
   // next intervals are 0 long too (their levels come at the same tick): the remainder may
   // grow by rho that many times before it carries.
-  int64_t zeros_after() const { return g_.q > 0 || g_.rho == 0 ? 0 : (g_.den - 1 - rem_) / g_.rho; }
+  int64_t zeros_after() const { return q_ > 0 || rho_ == 0 ? 0 : (z_.den - 1 - rem_) / rho_; }
   // The lengths as q, q + 1 (ramp_step.hpp's walk) and the remainder after the last one.
-  const IntervalGrid& grid() const { return g_; }
+  IntervalGrid grid() const { return {q_, rho_, z_.den}; }
   int64_t remainder() const { return rem_; }
   // Passes `n` intervals a walk went through (walk_to_step), `rem` the remainder after them.
   void advance(int64_t n, int64_t rem) {
@@ -47,7 +47,7 @@ class IntervalCursor {
   }
   // Passes `m` (<= zeros_after()) intervals of length 0.
   void skip_zeros(int64_t m) {
-    rem_ += m * g_.rho;
+    rem_ += m * rho_;
     k_ += m;
   }
 
@@ -57,15 +57,15 @@ class IntervalCursor {
     const __int128 end = (k + 1) * n, begin = k * n;
     z_ = z;
     k_ = k;
-    g_ = IntervalGrid{z.num / z.den, z.num % z.den, z.den};
+    q_ = z.num / z.den;
+    rho_ = z.num % z.den;
     rem_ = static_cast<int64_t>(end % z.den);
     return static_cast<Tick>(end / z.den - begin / z.den);
   }
 
   Rational z_{0, 0};  // den 0: no Z yet, the first call seeks
   int64_t k_ = -2;
-  IntervalGrid g_;
-  int64_t rem_ = 0;
+  int64_t q_ = 0, rho_ = 0, rem_ = 0;
 };
 
 }  // namespace stepnode::motion
