@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "node/motion/ramp.hpp"
+#include "node/motion/ramp_step.hpp"
 #include "node/motion/timebase.hpp"
 
 namespace stepnode::motion {
@@ -36,6 +37,14 @@ class IntervalCursor {
   // next intervals are 0 long too (their levels come at the same tick): the remainder may
   // grow by rho that many times before it carries.
   int64_t zeros_after() const { return q_ > 0 || rho_ == 0 ? 0 : (z_.den - 1 - rem_) / rho_; }
+  // The lengths as q, q + 1 (ramp_step.hpp's walk) and the remainder after the last one.
+  IntervalGrid grid() const { return {q_, rho_, z_.den}; }
+  int64_t remainder() const { return rem_; }
+  // Passes `n` intervals a walk went through (walk_to_step), `rem` the remainder after them.
+  void advance(int64_t n, int64_t rem) {
+    k_ += n;
+    rem_ = rem;
+  }
   // Passes `m` (<= zeros_after()) intervals of length 0.
   void skip_zeros(int64_t m) {
     rem_ += m * rho_;

@@ -258,6 +258,13 @@ Tick StepGenerator::peek_plain() {
   int64_t level = level_, left = d - acc_, passed = 0;       // left: phase still to come
   Tick t = t_, end = interval_end_;
   IntervalCursor cursor = cursor_;
+  // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
+  // (q + 1)·kWalked·(L + kWalked)): solved at once (ramp_step.hpp), not walked.
+  if (const int64_t here = level * (end - t); here < left) {
+    const double most = static_cast<double>(cursor.grid().q + 1) * static_cast<double>(kWalked) *
+                        static_cast<double>(level + kWalked);
+    if (most < static_cast<double>(left - here)) return peek_far(dir, plain);
+  }
   // level * length stays far inside int64 where no step falls: below one step's phase.
   for (int64_t phase; (phase = level * (end - t)) < left;) {
     if (passed >= plain) return kUnpeeked;
@@ -272,6 +279,17 @@ Tick StepGenerator::peek_plain() {
   // next() goes on from there.
   if (passed > 0) ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
   return t + (left + level - 1) / level;
+}
+
+Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
+  // peek_plain() for a step many levels on: the interval that holds it, solved.
+  RampWalk w{t_, interval_end_, level_, ramp_.phase_per_step - acc_, 0, cursor_.remainder()};
+  if (!walk_to_step(w, cursor_.grid(), dir, plain)) return kUnpeeked;
+  IntervalCursor cursor = cursor_;
+  cursor.advance(w.passed, w.rem);
+  ahead_ = Ahead{true,  w.t,   ramp_.phase_per_step - w.left, w.level, interval_index_ + w.passed,
+                 w.end, cursor};
+  return w.t + (w.left + w.level - 1) / w.level;
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {

@@ -96,6 +96,11 @@ class StepGenerator {
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
   Tick peek_plain();
+  // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
+  // walked (the solve's divisions and square root cost more cycles than ~30 additions),
+  // many far faster solved. Measured with ramp_cost_bench (README "Figures").
+  static constexpr int64_t kWalked = 32;
+  Tick peek_far(int64_t dir, int64_t plain);
   void plan_decel();
   void count_step();
   // The jerk-limited profile (ramp.s_curve): step_generator_s_curve.cpp.

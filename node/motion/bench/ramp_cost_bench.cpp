@@ -11,6 +11,8 @@
 //   hp      HP 44714A PROFILE FREQ 0 10000 100000 (Hz, Hz/s), MOVE 20000
 //   cia402  CiA 402 PP: 6081h 10,000, 6083h = 6084h 100,000, 6086h = 0
 //   scurve  the same with 6086h = 3 and every 60A4h jerk 1,000,000 steps/s^3
+//   slow    CiA 402 PP at 1,000 steps/s^2 to 1,000 steps/s, 2,000 steps (the finest grid,
+//           64 levels per step/s: the first steps span thousands of levels)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -41,6 +43,8 @@ bool kind_of(const char* name, Kind& k) {
       k.ramp.s_curve = true;
       for (uint32_t& j : k.ramp.jerk) j = 1'000'000;
     }
+  } else if (std::strcmp(name, "slow") == 0) {
+    k = {profile_ramp(1'000, 1'000, 1'000, profile_levels_per_hz(1'000)), 2'000};
   } else {
     return false;
   }
@@ -79,7 +83,7 @@ struct Totals {
 int main(int argc, char** argv) {
   Kind k;
   if (argc < 2 || !kind_of(argv[1], k)) {
-    std::fprintf(stderr, "usage: ramp_cost_bench horner|hp|cia402|scurve [moves] [ramps]\n");
+    std::fprintf(stderr, "usage: ramp_cost_bench horner|hp|cia402|scurve|slow [moves] [ramps]\n");
     return 2;
   }
   const int moves = argc > 2 ? std::atoi(argv[2]) : 20;

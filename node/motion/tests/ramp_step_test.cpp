@@ -1,0 +1,146 @@
+// The ramp walk of ramp_step.hpp against the level-by-level walk (every field, on random
+// grids from Horner's whole Z to fine fractional ones, across the 64- and 128-bit paths),
+// and the generator's peeked steps against its own step loop on random moves changed
+// mid-way (peek() then next() takes the walk's state; next() alone walks level by level).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include "node/motion/ramp_step.hpp"
+#include "node/motion/step_generator.hpp"
+
+namespace stepnode::motion {
+namespace {
+
+int64_t pick(std::mt19937_64& rng, int64_t lo, int64_t hi) {
+  return lo + static_cast<int64_t>(rng() % static_cast<uint64_t>(hi - lo + 1));
+}
+
+IntervalGrid grid_of(int64_t num, int64_t den) { return IntervalGrid{num / den, num % den, den}; }
+
+// The level changes the walk made to reach its step (0 where it did not, or not asked).
+int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t top_level,
+                         int64_t top_left) {
+  const int64_t dir = rng() % 2 ? 1 : -1;
+  RampWalk start;
+  // Levels and phases of every size up to the top, most of them far below it.
+  start.level = pick(rng, 1, int64_t{1} << pick(rng, 0, 63 - __builtin_clzll(top_level)));
+  start.t = pick(rng, 0, 1'000'000);
+  start.end = start.t + pick(rng, 0, g.q + 1);
+  // At most a few thousand intervals to the step (the reference walks each).
+  const int64_t reach = std::min(top_left, start.level * (g.q + 1) * 2'000);
+  start.left = pick(rng, 1, int64_t{1} << pick(rng, 0, 63 - __builtin_clzll(reach)));
+  start.rem = pick(rng, 0, g.den - 1);
+  // Levels stay >= 1 going down.
+  const int64_t room = dir > 0 ? pick(rng, 0, 1'000'000) : pick(rng, 0, start.level - 1);
+  if (start.level * (start.end - start.t) >= start.left) return 0;  // the caller's case
+  RampWalk walked = start, solved = start;
+  const bool a = walk_levels(walked, g, dir, room);
+  const bool b = walk_to_step(solved, g, dir, room);
+  EXPECT_EQ(a, b) << "q " << g.q << " rho " << g.rho << " den " << g.den << " L " << start.level
+                  << " left " << start.left << " dir " << dir;
+  if (!a || !b) return 0;
+  EXPECT_EQ(walked.t, solved.t);
+  EXPECT_EQ(walked.end, solved.end);
+  EXPECT_EQ(walked.level, solved.level);
+  EXPECT_EQ(walked.left, solved.left);
+  EXPECT_EQ(walked.passed, solved.passed);
+  EXPECT_EQ(walked.rem, solved.rem);
+  return walked.passed;
+}
+
+// Walks `cases` random starts on grids from `make`; most of them must span many levels.
+template <typename MakeGrid>
+void expect_same_walks(uint64_t seed, int cases, int64_t top_level, int64_t top_left,
+                       MakeGrid make) {
+  std::mt19937_64 rng(seed);
+  int spanning = 0;
+  for (int i = 0; i < cases; ++i) {
+    const IntervalGrid g = make(rng);
+    if (expect_same_walk(rng, g, top_level, top_left) >= 5) ++spanning;
+    if (::testing::Test::HasFailure()) return;
+  }
+  EXPECT_GT(spanning, cases / 20);  // the cases the solve is for were tried
+}
+
+TEST(RampWalk, EveryAnswerIsTheLevelWalksOnProfileGrids) {
+  // CiA 402 and HP grids: Z of 1 to 200 ticks, a fraction of any size (den up to 10^6),
+  // levels up to 10^6, up to a step of 5·10^6 phase units.
+  expect_same_walks(402, 200'000, 1'000'000, 5'000'000, [](std::mt19937_64& rng) {
+    const int64_t den = rng() % 4 == 0 ? 1 : pick(rng, 2, 1'000'000);
+    return grid_of(pick(rng, den, den * pick(rng, 1, 200)), den);
+  });
+}
+
+TEST(RampWalk, ManyCarriesPerStepAndNearlyHalfFractions) {
+  // rho/den near 1/2 and near 1: more than 8 carries per step (the floor sum).
+  expect_same_walks(13, 100'000, 100'000, 2'000'000, [](std::mt19937_64& rng) {
+    const int64_t den = pick(rng, 1'000, 100'000);
+    const int64_t rho = rng() % 2 ? den / 2 + pick(rng, -3, 3) : den - pick(rng, 1, 20);
+    return grid_of(pick(rng, 1, 3) * den + rho, den);
+  });
+}
+
+TEST(RampWalk, HugeLevelsAndStepsTakeTheWidePath) {
+  // Phases and levels past 2^29 (HP's µHz levels, 64 levels per step/s at 10^8 steps/s):
+  // the checks in doubles and the 128-bit walk.
+  expect_same_walks(7, 50'000, int64_t{1} << 40, int64_t{1} << 50, [](std::mt19937_64& rng) {
+    const int64_t den = pick(rng, 1, 1'000'000'000);
+    return grid_of(pick(rng, den, den * 100), den);
+  });
+}
+
+TEST(RampWalk, IntervalsOfNoTicksAreLeftToTheGenerator) {
+  RampWalk w{0, 0, 10, 1'000, 0, 0};
+  EXPECT_FALSE(walk_to_step(w, grid_of(1, 3), 1, 100));
+}
+
+// A move's steps, peeking before each (as the axes do) or not.
+std::vector<Tick> run(const RampSpec& r, int64_t distance, bool peek, std::mt19937_64 rng,
+                      int changes) {
+  StepGenerator g;
+  g.start(r, 0, 1, distance > 0 ? std::optional<int64_t>(distance) : std::nullopt);
+  std::vector<Tick> out;
+  Step s;
+  int64_t change_at = pick(rng, 10, 400);
+  while (out.size() < 20'000) {
+    if (peek && !g.peek()) break;
+    if (!g.next(s)) break;
+    out.push_back(s.time);
+    if (changes > 0 && static_cast<int64_t>(out.size()) == change_at) {
+      --changes;
+      change_at += pick(rng, 10, 400);
+      switch (rng() % 4) {
+        case 0: g.change_velocity(s.time, pick(rng, 1, r.run_level)); break;
+        case 1: g.retarget(s.time, pick(rng, 1, 3'000), r); break;
+        case 2: g.stop(s.time); break;
+        default:
+          g.stop(s.time, Rational{r.decel_ticks_per_level.num, 2 * r.decel_ticks_per_level.den});
+          break;
+      }
+    }
+  }
+  return out;
+}
+
+TEST(RampWalk, PeekedStepsAreTheStepLoopsOnRandomMoves) {
+  std::mt19937_64 rng(2026);
+  for (int i = 0; i < 300; ++i) {
+    const int64_t accel = pick(rng, 1'000, 2'000'000), decel = pick(rng, 1'000, 2'000'000);
+    const int64_t velocity = pick(rng, 100, 50'000);
+    const RampSpec r =
+        profile_ramp(velocity, accel, decel, profile_levels_per_hz(std::max(accel, decel)));
+    const int64_t distance = rng() % 4 == 0 ? 0 : pick(rng, 1, 30'000);
+    const int changes = static_cast<int>(rng() % 4);
+    const std::mt19937_64 script(rng());
+    const std::vector<Tick> peeked = run(r, distance, true, script, changes);
+    const std::vector<Tick> looped = run(r, distance, false, script, changes);
+    ASSERT_EQ(peeked, looped) << "move " << i << ": v " << velocity << " a " << accel << " d "
+                              << decel << " distance " << distance;
+  }
+}
+
+}  // namespace
+}  // namespace stepnode::motion
