@@ -42,6 +42,7 @@ void Axis::set_config(const AxisConfig& config) {
   rules_ = rules_of(config_);
   // Another front end's steps matter to the module only for the position check.
   core_.watch_steps(*this, config_.encoder != EncoderKind::None && config_.encoder_tolerance > 0);
+  core_.hooks_changed(*this);  // the encoder's rules may look at every step now, or no longer
 }
 
 void Axis::power_up(Tick now) {

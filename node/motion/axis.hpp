@@ -98,9 +98,7 @@ class Axis final : public FrontEnd, public AxisListener {
   std::function<void(const AxisEvent&)> on_event;
 
   // FrontEnd: the Horner jobs' rules.
-  Hooks hooks() const override {
-    return {.deadline = job_ == Job::Home, .before_step = job_ == Job::Home};
-  }
+  Hooks hooks() const override;
   void poll(Tick now) override;
   std::optional<Tick> deadline() const override;
   void at_deadline(Tick when) override;
@@ -161,6 +159,9 @@ class Axis final : public FrontEnd, public AxisListener {
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);
+  // Whether the encoder's rules look at every step: position validation (STP100 6.3.2)
+  // or stall detection (6.3.3), both of axis 1's encoder.
+  bool encoder_rules_every_step() const;
   void select(unsigned index, Tick now);
 
   AxisConfig config_;

@@ -6,6 +6,20 @@
 
 namespace stepnode::motion {
 
+FrontEnd::Hooks Axis::hooks() const {
+  // The steps at which the rules of after_step can act (the core calls it at those only).
+  // A Find Home (its stages), a move (its step count, the index window) and the encoder's
+  // checks look at every step; a jog's other rules act only at an active end limit
+  // (SPM30 3.3.1) or at the position its end on the bound is set from.
+  const bool home = job_ == Job::Home;
+  return {.deadline = home,
+          .before_step = home,
+          .every_step = home || job_ == Job::Move || encoder_rules_every_step(),
+          .step_rule_inputs = static_cast<uint8_t>(static_cast<uint8_t>(Input::LowerLimit) |
+                                                   static_cast<uint8_t>(Input::UpperLimit)),
+          .step_rule_position = job_ == Job::Jog ? jog_end_from_ : std::nullopt};
+}
+
 void Axis::step_taken(const Step& step) {
   (void)step;
   // Another front end's job (the core gives the Horner jobs' steps to after_step): its rules
@@ -54,6 +68,7 @@ void Axis::after_step(const Step& step) {
     const int64_t bound = step.direction > 0 ? kPositionMax : kPositionMin;
     core_.retarget(t, std::llabs(bound - core_.position()), move_ramp_);
     jog_end_from_.reset();
+    core_.hooks_changed(*this);  // no position rule left
   }
   if (job_ == Job::Move && move_indexed_ && !index_taken_) {
     // STP113 C1.3.4 / STP100 5.3.5: the index input counts only inside the window, which
