@@ -1,8 +1,9 @@
-// The Horner rules of a jog act only at some steps, and the core calls after_step at those
-// only (Axis::hooks): an active end limit (SPM30 3.3.1), the position a jog's end on the
-// bound of the position words is set from (SPM30 3.3), and, once a new configuration turns
-// them on, the encoder's stall windows (SPM30 5.4). Each must act at exactly its step
-// however many steps one advance takes (the device advances once per tick, or less often).
+// The Horner rules of a jog or a move act only at some steps, and the core calls after_step
+// at those only (Axis::hooks): an active end limit (SPM30 3.3.1), the position a jog's end
+// on the bound of the position words is set from (SPM30 3.3), an indexed move's window till
+// its index (STP100 5.3.5), and, once a new configuration turns them on, the encoder's stall
+// windows (SPM30 5.4); a move's step count is the generator's. Each must act at exactly its
+// step however many steps one advance takes (the device advances once per tick, or less).
 #include "node/motion/tests/axis_harness.hpp"
 
 namespace stepnode::motion {
@@ -91,6 +92,49 @@ TEST_F(AxisStepRules, Spm30_5_4_StallDetectionTurnedOnWithinAJogLooksAtItsNextSt
   EXPECT_EQ(mech(), 300);
   EXPECT_TRUE(has(status::kMotorStalled));
   EXPECT_FALSE(any(status::kMoving));
+}
+
+TEST_F(AxisStepRules, Spm30_3_3_1_AMoveStopsAtTheStepThatReachesTheUpperLimit) {
+  sim::AxisMachineConfig m = plain();
+  m.upper_limit = 700;
+  build_with({}, m);
+  move_rel(5000);
+  one_long_advance();
+  EXPECT_EQ(mech(), 700);
+  EXPECT_TRUE(has(status::kUpperLimit));
+  EXPECT_FALSE(any(status::kResumable));  // an error ended it (SPM30 %Q15)
+}
+
+TEST_F(AxisStepRules, Spm30_4_AMoveStoppedShortAndResumedEndsOnItsTarget) {
+  build_with({}, plain());
+  move_rel(-3000);
+  while (axis->motor_position() > -1000) at(*axis->next_step_time());
+  issue(command::kDecelStop);
+  one_long_advance();
+  const int64_t stopped_at = mech();
+  ASSERT_GT(stopped_at, -3000);  // short of the target: resumable
+  ASSERT_TRUE(has(status::kResumable));
+  issue(command::kResumeMove);  // the rest of the move: from the steps the first one took
+  one_long_advance();
+  EXPECT_EQ(mech(), -3000);
+  EXPECT_EQ(axis->motor_position(), -3000);
+  EXPECT_FALSE(any(status::kResumable));  // done: nothing left to resume
+  EXPECT_EQ(errors(), 0);
+}
+
+TEST_F(AxisStepRules, Stp100_5_3_5_AnIndexedMoveEndsIndexDestinationPastTheIndexInOneAdvance) {
+  sim::AxisMachineConfig m = plain();
+  m.index = sim::Cam{2500, 10};  // active from the step to 2500
+  build_with({}, m);
+  CommandWords& w = axis->words();
+  w.destination = 9000;
+  w.index_destination = 400;
+  w.index_window_open = 1000;
+  w.index_window_close = 8000;
+  issue(command::kMoveIndexed);
+  one_long_advance();
+  EXPECT_EQ(mech(), 2500 + 400);  // N more steps beyond the index point
+  EXPECT_EQ(errors(), 0);
 }
 
 }  // namespace
