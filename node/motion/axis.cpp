@@ -42,11 +42,13 @@ void Axis::set_config(const AxisConfig& config) {
   rules_ = rules_of(config_);
   // Another front end's steps matter to the module only for the position check.
   core_.watch_steps(*this, config_.encoder != EncoderKind::None && config_.encoder_tolerance > 0);
+  core_.hooks_changed(*this);  // the encoder's rules may look at every step now, or no longer
 }
 
 void Axis::power_up(Tick now) {
   if (own_core_) core_.power_up(now);
   job_ = Job::None;
+  move_stepping_ = false;
   errors_ = status::kPowerUp;  // SPM30 3.1: every bit off except %I8
   position_valid_ = false;
   resumable_ = false;
@@ -103,6 +105,8 @@ void Axis::emergency_stop(Tick when, bool was_moving) {
 }
 
 void Axis::end_job(Tick when) {
+  move_done_steps_ = move_done_steps();  // the motion's steps, before another motion starts
+  move_stepping_ = false;
   // STP100 5.3.5 NOTE: "at the end of an Indexed Move, DIR+ and DIR- are always taken Low
   // and High": DIR is its move-in-progress output, whatever ended the move.
   if (job_ == Job::Move && move_indexed_) core_.set_dir_output(false, when);

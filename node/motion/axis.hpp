@@ -98,9 +98,7 @@ class Axis final : public FrontEnd, public AxisListener {
   std::function<void(const AxisEvent&)> on_event;
 
   // FrontEnd: the Horner jobs' rules.
-  Hooks hooks() const override {
-    return {.deadline = job_ == Job::Home, .before_step = job_ == Job::Home};
-  }
+  Hooks hooks() const override;
   void poll(Tick now) override;
   std::optional<Tick> deadline() const override;
   void at_deadline(Tick when) override;
@@ -161,6 +159,9 @@ class Axis final : public FrontEnd, public AxisListener {
   void home_event(Tick now, bool at_limit = false);
   void check_position_valid();
   void check_stall(const Step& step);
+  // Whether the encoder's rules look at every step: position validation (STP100 6.3.2)
+  // or stall detection (6.3.3), both of axis 1's encoder.
+  bool encoder_rules_every_step() const;
   void select(unsigned index, Tick now);
 
   AxisConfig config_;
@@ -179,7 +180,14 @@ class Axis final : public FrontEnd, public AxisListener {
   Job job_ = Job::None;
   int job_direction_ = +1;
   int64_t move_target_steps_ = 0;  // rel/abs/indexed: steps of the whole move
+  // The steps the move took: those of its earlier motions (a resume starts a new one) here,
+  // and, while `move_stepping_`, the running motion's as the generator counts them (no
+  // count of its own at every step). Settled into move_done_steps_ when the job ends.
   int64_t move_done_steps_ = 0;
+  bool move_stepping_ = false;
+  int64_t move_done_steps() const {
+    return move_done_steps_ + (move_stepping_ ? core_.generator().steps_done() : 0);
+  }
   RampSpec move_ramp_;
   bool move_indexed_ = false, move_repeatable_ = false, index_taken_ = false;
   // The indexed move's own words, taken with the command (SPM30 3.4: the words may change for

@@ -33,6 +33,9 @@ bool Axis::start_motion(const RampSpec& ramp, int direction, std::optional<int64
     job_ = Job::None;  // another front end's job: the command filter keeps this from happening
     return false;
   }
+  // A move's steps are the generator's from here (move_done_steps()); the steps of its
+  // earlier motions are in move_done_steps_ (the job's end settles each one).
+  move_stepping_ = job_ == Job::Move;
   restart_stall_windows(direction);
   return true;
 }
@@ -52,6 +55,7 @@ void Axis::start_move(int64_t distance, const RampSpec& ramp, Tick now, bool ind
     index_taken_ = false;
     move_target_steps_ = std::llabs(distance);
     move_done_steps_ = 0;
+    move_stepping_ = false;
   }
   index_was_active_ = inputs().index();  // an index already on was received before the window
   if (!resume && !ends_in_range(distance, indexed)) {

@@ -7,6 +7,7 @@
 namespace stepnode::motion {
 namespace {
 constexpr Tick kNever = std::numeric_limits<Tick>::max();  // later than any `now`
+constexpr int64_t kNoPosition = int64_t{1} << 40;          // no int32 motor position
 }  // namespace
 
 AxisCore::AxisCore(const std::vector<MotorPort*>& motors) {
@@ -27,6 +28,7 @@ void AxisCore::update_rounds() {
   step_rounds_ = owner_ && !waiting_ && !hooks_.deadline && !hooks_.before_step;
   step_rule_ = owner_ && (hooks_.every_step ||
                           (selected_motor_->levels.active & hooks_.step_rule_inputs) != 0);
+  rule_position_ = owner_ && hooks_.step_rule_position ? *hooks_.step_rule_position : kNoPosition;
 }
 
 void AxisCore::power_up(Tick now) {
@@ -207,7 +209,7 @@ void AxisCore::take_due(Tick now) {
     generator_.next(step);
     take(step);
     if (estop_active()) return emergency_stop(step.time);
-    if (step_rule_) owner_->after_step(step);
+    if (step_rule_ || position_ == rule_position_) owner_->after_step(step);
     if (!step_rounds_) return;
   }
 }
@@ -250,7 +252,7 @@ bool AxisCore::round(Tick now) {
     emergency_stop(step.time);
     return true;
   }
-  if (step_rule_) owner_->after_step(step);
+  if (step_rule_ || position_ == rule_position_) owner_->after_step(step);
   return true;
 }
 

@@ -48,6 +48,9 @@ class FrontEnd {
     // step says so (`AxisCore::hooks_changed`).
     bool every_step = true;
     uint8_t step_rule_inputs = 0;
+    // after_step() also at the step after which the motor position is this one (a rule of
+    // a position: the Horner jog's end set on the bound of the position words).
+    std::optional<int32_t> step_rule_position = std::nullopt;
   };
   virtual Hooks hooks() const { return {}; }
   // How the job's step leaves the outputs (HP PULSE SD|SS). It may be asked ahead of the
@@ -282,6 +285,9 @@ class AxisCore {
   bool direct_steps_ = true;
   bool step_rounds_ = false;
   bool step_rule_ = false;
+  // The owner's step_rule_position, or kNoPosition (axis_core.cpp: outside int32, a
+  // position the motor never has).
+  int64_t rule_position_ = int64_t{1} << 40;
 };
 
 }  // namespace stepnode::motion

@@ -32,6 +32,12 @@ int32_t Axis::encoder_position() const {
   return static_cast<int32_t>(encoder_offset_ + steps);
 }
 
+bool Axis::encoder_rules_every_step() const {
+  if (core_.selected() != 0) return false;
+  return rules_.stall_detection ||
+         (config_.encoder != EncoderKind::None && config_.encoder_tolerance > 0);
+}
+
 void Axis::check_position_valid() {
   if (config_.encoder == EncoderKind::None || config_.encoder_tolerance <= 0 ||
       core_.selected() != 0)

@@ -6,6 +6,22 @@
 
 namespace stepnode::motion {
 
+FrontEnd::Hooks Axis::hooks() const {
+  // The steps at which the rules of after_step can act (the core calls it at those only).
+  // A Find Home (its stages), an indexed move till its index (the window) and the
+  // encoder's checks look at every step; the other rules of a move or a jog act only at
+  // an active end limit (SPM30 3.3.1) or at the position a jog's end on the bound is set
+  // from (a move's step count is the generator's: move_done_steps()).
+  const bool home = job_ == Job::Home;
+  return {.deadline = home,
+          .before_step = home,
+          .every_step = home || (job_ == Job::Move && move_indexed_ && !index_taken_) ||
+                        encoder_rules_every_step(),
+          .step_rule_inputs = static_cast<uint8_t>(static_cast<uint8_t>(Input::LowerLimit) |
+                                                   static_cast<uint8_t>(Input::UpperLimit)),
+          .step_rule_position = job_ == Job::Jog ? jog_end_from_ : std::nullopt};
+}
+
 void Axis::step_taken(const Step& step) {
   (void)step;
   // Another front end's job (the core gives the Horner jobs' steps to after_step): its rules
@@ -33,7 +49,6 @@ void Axis::aborted(Tick when) {
 
 void Axis::after_step(const Step& step) {
   Tick t = step.time;
-  if (job_ == Job::Move) ++move_done_steps_;
   if (step.direction < 0 && inputs().lower_limit()) {
     if (job_ == Job::Home && home_stage_ == HomeStage::Seek && limit_qualified_home()) {
       return home_event(t, /*at_limit=*/true);
@@ -54,6 +69,7 @@ void Axis::after_step(const Step& step) {
     const int64_t bound = step.direction > 0 ? kPositionMax : kPositionMin;
     core_.retarget(t, std::llabs(bound - core_.position()), move_ramp_);
     jog_end_from_.reset();
+    core_.hooks_changed(*this);  // no position rule left
   }
   if (job_ == Job::Move && move_indexed_ && !index_taken_) {
     // STP113 C1.3.4 / STP100 5.3.5: the index input counts only inside the window, which
@@ -66,8 +82,8 @@ void Axis::after_step(const Step& step) {
     index_was_active_ = index;
     const StepGenerator& g = core_.generator();
     bool window = g.phase() == MotionPhase::Running && g.level() >= move_ramp_.run_level &&
-                  move_done_steps_ >= int64_t{index_window_open_} &&
-                  move_done_steps_ < int64_t{index_window_close_};
+                  move_done_steps() >= int64_t{index_window_open_} &&
+                  move_done_steps() < int64_t{index_window_close_};
     if (window && became_active) {
       index_taken_ = true;
       RampSpec alternate = move_ramp_;
@@ -77,7 +93,8 @@ void Axis::after_step(const Step& step) {
       // the base velocity in the time that fits (README: "The Horner module's rules").
       fit_deceleration(alternate, g.level(), index_destination_);
       core_.retarget(t, index_destination_, alternate);
-      move_target_steps_ = move_done_steps_ + index_destination_;
+      move_target_steps_ = move_done_steps() + index_destination_;
+      core_.hooks_changed(*this);  // the index is taken: no window left to look at
     }
   }
 }

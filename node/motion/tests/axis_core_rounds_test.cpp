@@ -3,7 +3,8 @@
 // must still be obeyed from the very next step: a select of another motor whose e-stop is
 // active (SPM30 3.3.1: no step goes out once the selected motor's e-stop is), and a next
 // motion whose hooks differ. And a rule that asks for steps only at some inputs
-// (FrontEnd::Hooks::step_rule_inputs) is called at exactly those steps.
+// (FrontEnd::Hooks::step_rule_inputs) or at one position (step_rule_position) is called at
+// exactly those steps.
 #include <gtest/gtest.h>
 
 #include <vector>
@@ -110,6 +111,29 @@ TEST(AxisCoreRounds, ARuleOfTheLimitsIsCalledOnlyAtTheStepsWithTheLimitActive) {
   core.hooks_changed(fe);
   core.advance_to(2 * kClockHz);
   EXPECT_EQ(fe.seen, (std::vector<int32_t>{6, 5, 3, 2, 1}));
+}
+
+// A rule of one position only (FrontEnd::Hooks::step_rule_position), no inputs.
+struct PositionRule final : FrontEnd {
+  AxisCore* core = nullptr;
+  std::vector<int32_t> seen;  // the core's position at each after_step
+  Hooks hooks() const override { return {.every_step = false, .step_rule_position = 4}; }
+  void after_step(const Step&) override { seen.push_back(core->position()); }
+  void motion_ended(Tick) override {}
+};
+
+TEST(AxisCoreRounds, ARuleOfAPositionIsCalledAtTheStepsThatReachItOnly) {
+  sim::AxisMachine m;
+  AxisCore core({&m});
+  PositionRule fe;
+  fe.core = &core;
+  ASSERT_TRUE(core.start(fe, constant(1000), +1, 7, 0));
+  core.advance_to(kClockHz);  // all 7 steps in one advance
+  EXPECT_EQ(fe.seen, (std::vector<int32_t>{4}));
+  ASSERT_TRUE(core.start(fe, constant(1000), -1, 7, kClockHz));  // 7 down to 0: 4 once more
+  core.advance_to(2 * kClockHz);
+  EXPECT_EQ(fe.seen, (std::vector<int32_t>{4, 4}));
+  EXPECT_EQ(core.position(), 0);
 }
 
 }  // namespace
