@@ -7,7 +7,6 @@
 namespace stepnode::motion {
 namespace {
 constexpr Tick kNever = std::numeric_limits<Tick>::max();  // later than any `now`
-constexpr int64_t kNoPosition = int64_t{1} << 40;          // no int32 motor position
 }  // namespace
 
 AxisCore::AxisCore(const std::vector<MotorPort*>& motors) {

@@ -216,9 +216,8 @@ class AxisCore {
   const MotorPort& motor() const { return *selected_motor_->port; }
   const MotorPort& motor(unsigned n) const { return *motors_.at(n).port; }
   unsigned motors() const { return static_cast<unsigned>(motors_.size()); }
-  unsigned selected() const { return selected_; }
+  unsigned selected() const { return static_cast<unsigned>(selected_motor_ - motors_.data()); }
   void select(unsigned n) {
-    selected_ = n;
     selected_motor_ = &motors_[n];
     update_rounds();
     step_rounds_ = false;  // a rule's select: the next round looks at this motor's e-stop
@@ -275,8 +274,7 @@ class AxisCore {
   int32_t position_ = 0;
   bool dir_high_ = false;
   Tick dir_changed_at_ = -(Tick{1} << 60);  // long before any motion: DIR has been stable
-  unsigned selected_ = 0;
-  Motor* selected_motor_ = nullptr;  // &motors_[selected_]
+  Motor* selected_motor_ = nullptr;         // the motor stepped and sensed, in motors_
   // What a step's round needs, worked out when the job, its hooks or the horizon change
   // rather than at every step: a step goes straight to the step sink (horizon 0, no pulse
   // hook); a round has nothing but the step (an owner, no wait, no deadline, no
@@ -285,9 +283,9 @@ class AxisCore {
   bool direct_steps_ = true;
   bool step_rounds_ = false;
   bool step_rule_ = false;
-  // The owner's step_rule_position, or kNoPosition (axis_core.cpp: outside int32, a
-  // position the motor never has).
-  int64_t rule_position_ = int64_t{1} << 40;
+  // The owner's step_rule_position, or one outside int32: a position the motor never has.
+  static constexpr int64_t kNoPosition = int64_t{1} << 40;
+  int64_t rule_position_ = kNoPosition;
 };
 
 }  // namespace stepnode::motion

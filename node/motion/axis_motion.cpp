@@ -17,8 +17,7 @@ FrontEnd::Hooks Axis::hooks() const {
           .before_step = home,
           .every_step = home || (job_ == Job::Move && move_indexed_ && !index_taken_) ||
                         encoder_rules_every_step(),
-          .step_rule_inputs = static_cast<uint8_t>(static_cast<uint8_t>(Input::LowerLimit) |
-                                                   static_cast<uint8_t>(Input::UpperLimit)),
+          .step_rule_inputs = kLimitInputs,
           .step_rule_position = job_ == Job::Jog ? jog_end_from_ : std::nullopt};
 }
 

@@ -22,6 +22,10 @@ enum class Input : uint8_t {
                   // which level halts; the switch open, pulled up, is HIGH)
 };
 
+// The two end limits, as a set of Input bits (the inputs a limit rule looks at).
+constexpr uint8_t kLimitInputs =
+    static_cast<uint8_t>(Input::LowerLimit) | static_cast<uint8_t>(Input::UpperLimit);
+
 // Which inputs are active (a set of Input bits).
 struct InputLevels {
   uint8_t active = 0;

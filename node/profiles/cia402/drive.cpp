@@ -161,10 +161,8 @@ void Drive::halt(bool on, Tick now) {
 motion::FrontEnd::Hooks Drive::hooks() const {
   // after_step's rules: homing's and a queued set-point's (change on set-point) look at
   // every step; otherwise the one rule is the stop at a limit switch.
-  return {
-      .every_step = homing_ == Homing::InProgress || next_.has_value(),
-      .step_rule_inputs = static_cast<uint8_t>(static_cast<uint8_t>(motion::Input::LowerLimit) |
-                                               static_cast<uint8_t>(motion::Input::UpperLimit))};
+  return {.every_step = homing_ == Homing::InProgress || next_.has_value(),
+          .step_rule_inputs = motion::kLimitInputs};
 }
 
 void Drive::after_step(const motion::Step& step) {
