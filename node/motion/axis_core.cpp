@@ -227,11 +227,12 @@ bool AxisCore::round(Tick now) {
     owner_->poll(now);
     if (waiting_) return false;
   }
-  std::optional<Tick> deadline = hooks_.deadline ? owner_->deadline() : std::nullopt;
+  // (kNever for none: a plain tick, which the compiler follows through the inlined peek.)
+  const Tick deadline = hooks_.deadline ? owner_->deadline().value_or(kNever) : kNever;
   std::optional<Tick> next = generator_.peek();
   if (!next && generator_.moving()) return !ramp_ends_later(now);
-  if (deadline && *deadline <= now && (!next || *next > *deadline)) {
-    owner_->at_deadline(*deadline);
+  if (deadline <= now && (!next || *next > deadline)) {
+    owner_->at_deadline(deadline);
     return true;
   }
   if (!next || *next > now) {

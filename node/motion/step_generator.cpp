@@ -211,12 +211,17 @@ bool StepGenerator::next(Step& out) {
     } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
       // A move too short for the running velocity turns where the ramps meet.
       begin_decel();
+    } else if (phase_ == MotionPhase::Running || phase_ == MotionPhase::Creeping) {
+      // The step after this one, here, where the state is at hand: the axes peek after
+      // every step, and at a constant level that answer is all a peek would compute.
+      ahead_.valid = false;
+      peeked_ = run_step_after();
     }
     return true;
   }
 }
 
-std::optional<Tick> StepGenerator::peek() {
+std::optional<Tick> StepGenerator::peek_unknown() {
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
@@ -224,11 +229,8 @@ std::optional<Tick> StepGenerator::peek() {
     if (phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating) {
       peeked_ = peek_plain();
     } else {
-      // A run or a creep: the step next() takes, unless the deceleration point comes first.
       ahead_.valid = false;
-      const int64_t d = ramp_.phase_per_step;
-      const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
-      if (!(phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_)) peeked_ = at;
+      peeked_ = run_step_after();
     }
   }
   if (peeked_ == kUnpeeked) {
@@ -237,6 +239,13 @@ std::optional<Tick> StepGenerator::peek() {
     peeked_ = copy.next(s) ? s.time : kNoStep;
   }
   return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
+}
+
+Tick StepGenerator::run_step_after() const {
+  // In a run or a creep: the step next() takes, unless the deceleration point comes first.
+  const int64_t d = ramp_.phase_per_step;
+  const Tick at = t_ + (d - acc_ + level_ - 1) / level_;
+  return phase_ == MotionPhase::Running && decel_tick_ >= 0 && at > decel_tick_ ? kUnpeeked : at;
 }
 
 Tick StepGenerator::peek_plain() {

@@ -29,7 +29,10 @@ class StepGenerator {
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out);
   // The time the next step would fall, without taking it (nullopt when idle).
-  std::optional<Tick> peek();
+  std::optional<Tick> peek() {
+    if (peeked_ >= 0) return peeked_;  // known (next() finds the one after a run's step)
+    return peek_unknown();
+  }
 
   // Decelerate to the base velocity from time `at` and end there (SPM30 %Q15); with
   // `decel`, at that deceleration (ticks per level) instead of the ramp's (CiA 402 quick stop).
@@ -95,7 +98,9 @@ class StepGenerator {
   Tick interval_length(Rational z, int64_t k);
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
+  std::optional<Tick> peek_unknown();
   Tick peek_plain();
+  Tick run_step_after() const;
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
   // walked (the solve's divisions and square root cost more cycles than ~30 additions),
   // many far faster solved. Measured with ramp_cost_bench (README "Figures").
@@ -118,7 +123,8 @@ class StepGenerator {
   int64_t peak_level_ = 0;
   Tick t_ = 0;  // time of the last event (step or level change)
   // peek()'s answer until the motion changes (a plain tick: the hot path copies the
-  // generator for every step): a step time, or one of these.
+  // generator for every step): a step time, or one of these. next() sets it in a run or a
+  // creep; every other change of the motion resets it.
   static constexpr Tick kUnpeeked = -2, kNoStep = -1;
   Tick peeked_ = kUnpeeked;
   int64_t acc_ = 0;  // phase accumulator, 0 <= acc_ < phase_per_step
