@@ -182,6 +182,8 @@ bool StepGenerator::next(Step& out) {
     // ticks the step needs against the interval's end, without the division; level times
     // an interval's length is of the order of the ramp's ticks, far inside int64).
     if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
+      // At the step's interval or the ramp's last plain one, solved.
+      if (cursor_.steep() && !walked_ && solve_steep()) continue;
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
@@ -239,6 +241,29 @@ std::optional<Tick> StepGenerator::peek() {
   return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
 }
 
+int64_t StepGenerator::plain_levels() const {
+  if (phase_ == MotionPhase::Accelerating) return peak_level_ - level_;
+  return level_ - std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) -
+         1;
+}
+
+bool StepGenerator::solve_steep() {
+  // Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2): the walk to the step or the
+  // ramp's last plain level, solved (ramp_step.hpp), not one loop turn per tick.
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
+  const int64_t room = plain_levels();
+  if (!cursor_.steep() || room <= 0) return false;
+  const int64_t d = ramp_.phase_per_step;
+  RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
+  walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
+  t_ = w.t, acc_ = d - w.left, level_ = w.level;
+  interval_index_ += w.passed, interval_end_ = w.end;
+  cursor_.advance(w.passed, w.rem);
+  return true;
+}
+
 Tick StepGenerator::peek_plain() {
   // In a ramp, most steps fall in an interval reached by plain level changes (one up or
   // down, the phase unchanged): the step next() takes, found without copying the
@@ -248,14 +273,9 @@ Tick StepGenerator::peek_plain() {
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
-  // end_interval()'s cases other than one level up or down begin at this level: the ramp's
-  // top, or the level a ramp down ends or holds at.
-  const int64_t last =
-      up ? peak_level_
-         : std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
   const int64_t dir = up ? 1 : -1;
-  const int64_t plain = up ? last - level_ : level_ - last;  // level changes before `last`
-  int64_t level = level_, left = d - acc_, passed = 0;       // left: phase still to come
+  const int64_t plain = plain_levels();
+  int64_t level = level_, left = d - acc_, passed = 0;  // left: phase still to come
   Tick t = t_, end = interval_end_;
   IntervalCursor cursor = cursor_;
   // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
@@ -273,7 +293,8 @@ Tick StepGenerator::peek_plain() {
     level += dir;
     ++passed;
     const Tick len = cursor.next_length();
-    if (len == 0) return kUnpeeked;  // levels at one tick: next() passes them at once
+    // Several levels at one tick (Z < 1): solved from the start, not walked level by level.
+    if (len == 0) return peek_far(dir, plain);
     end = t + len;
   }
   // next() goes on from there.

@@ -28,6 +28,13 @@ class StepGenerator {
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out);
+  // next() with every ramp interval walked, none solved (the reference in the tests).
+  bool next_walked(Step& out) {
+    walked_ = true;
+    const bool stepped = next(out);
+    walked_ = false;
+    return stepped;
+  }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek();
 
@@ -95,6 +102,10 @@ class StepGenerator {
   Tick interval_length(Rational z, int64_t k);
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
+  // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
+  // other cases: the ramp's top, or the level a ramp down ends or holds at.
+  int64_t plain_levels() const;
+  bool solve_steep();
   Tick peek_plain();
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
   // walked (the solve's divisions and square root cost more cycles than ~30 additions),
@@ -136,6 +147,7 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
+  bool walked_ = false;           // next_walked(): every ramp interval walked, none solved
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_
