@@ -241,29 +241,6 @@ std::optional<Tick> StepGenerator::peek() {
   return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
 }
 
-int64_t StepGenerator::plain_levels() const {
-  if (phase_ == MotionPhase::Accelerating) return peak_level_ - level_;
-  return level_ - std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) -
-         1;
-}
-
-bool StepGenerator::solve_steep() {
-  // Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2): the walk to the step or the
-  // ramp's last plain level, solved (ramp_step.hpp), not one loop turn per tick.
-  const bool up = phase_ == MotionPhase::Accelerating;
-  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
-  if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
-  const int64_t room = plain_levels();
-  if (!cursor_.steep() || room <= 0) return false;
-  const int64_t d = ramp_.phase_per_step;
-  RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
-  walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
-  t_ = w.t, acc_ = d - w.left, level_ = w.level;
-  interval_index_ += w.passed, interval_end_ = w.end;
-  cursor_.advance(w.passed, w.rem);
-  return true;
-}
-
 Tick StepGenerator::peek_plain() {
   // In a ramp, most steps fall in an interval reached by plain level changes (one up or
   // down, the phase unchanged): the step next() takes, found without copying the
@@ -311,6 +288,29 @@ Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
   ahead_ = Ahead{true,  w.t,   ramp_.phase_per_step - w.left, w.level, interval_index_ + w.passed,
                  w.end, cursor};
   return w.t + (w.left + w.level - 1) / w.level;
+}
+
+int64_t StepGenerator::plain_levels() const {
+  if (phase_ == MotionPhase::Accelerating) return peak_level_ - level_;
+  return level_ - std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) -
+         1;
+}
+
+bool StepGenerator::solve_steep() {
+  // Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2): the walk to the step or the
+  // ramp's last plain level, solved (ramp_step.hpp), not one loop turn per tick.
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
+  const int64_t room = plain_levels();
+  if (!cursor_.steep() || room <= 0) return false;
+  const int64_t d = ramp_.phase_per_step;
+  RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
+  walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
+  t_ = w.t, acc_ = d - w.left, level_ = w.level;
+  interval_index_ += w.passed, interval_end_ = w.end;
+  cursor_.advance(w.passed, w.rem);
+  return true;
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {
