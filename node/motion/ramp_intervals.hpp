@@ -37,6 +37,8 @@ class IntervalCursor {
   // next intervals are 0 long too (their levels come at the same tick): the remainder may
   // grow by rho that many times before it carries.
   int64_t zeros_after() const { return q_ > 0 || rho_ == 0 ? 0 : (z_.den - 1 - rem_) / rho_; }
+  // Whether Z < 1 (q = 0): runs of 0-long intervals, several levels at one tick.
+  bool steep() const { return q_ == 0 && rho_ > 0; }
   // The lengths as q, q + 1 (ramp_step.hpp's walk) and the remainder after the last one.
   IntervalGrid grid() const { return {q_, rho_, z_.den}; }
   int64_t remainder() const { return rem_; }

@@ -76,12 +76,13 @@ bool walk_runs(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, in
   }
 }
 
-// sum_{i=0}^{n-1} floor((a·i + b)/m) for n >= 0, m > 0, a, b >= 0, a·n + b below 2^62.
-// Each round cuts the terms to the whole parts of a/m and b/m plus a remainder line whose
-// lattice points are counted the other way round (the axes swapped), so n shrinks like
-// the numbers in Euclid's algorithm.
-int64_t floor_sum(int64_t n, int64_t m, int64_t a, int64_t b) {
-  int64_t sum = 0;
+// sum_{i=0}^{n-1} floor((a·i + b)/m) for n >= 0, m > 0, a, b >= 0, a·n + b and the sum
+// within T. Each round cuts the terms to the whole parts of a/m and b/m plus a remainder
+// line whose lattice points are counted the other way round (the axes swapped), so n
+// shrinks like the numbers in Euclid's algorithm.
+template <typename T>
+[[gnu::always_inline]] inline T floor_sum(T n, T m, T a, T b) {
+  T sum = 0;
   for (;;) {
     if (a >= m) {
       sum += n * (n - 1) / 2 * (a / m);
@@ -91,7 +92,7 @@ int64_t floor_sum(int64_t n, int64_t m, int64_t a, int64_t b) {
       sum += n * (b / m);
       b %= m;
     }
-    const int64_t y = a * n + b;  // the line's height at i = n
+    const T y = a * n + b;  // the line's height at i = n
     if (y < m) return sum;
     n = y / m;
     b = y % m;
@@ -101,20 +102,173 @@ int64_t floor_sum(int64_t n, int64_t m, int64_t a, int64_t b) {
 
 // J(C) = sum_{i=1}^{C} j_i, j_i = ceil((i·den - rem)/rho): the intervals (counted from the
 // walk's start) whose remainder carries, the i-th carry where rem + j·rho first reaches
-// i·den. A few are added directly; more with the floor sum.
-int64_t carry_positions(int64_t count, const IntervalGrid& g, int64_t rem) {
-  const int64_t first = g.den - rem + g.rho - 1;  // i·den - rem + rho - 1 at i = 1
-  if (count > 8) return floor_sum(count, g.rho, g.den, first);
-  int64_t sum = 0;
-  for (int64_t i = 0, num = first; i < count; ++i, num += g.den) sum += num / g.rho;
+// i·den. A few are added directly; more with the floor sum. Both inlined: walk_to_step
+// calls them for every step, and a call costs as much as the few additions.
+template <typename T>
+[[gnu::always_inline]] inline T carry_positions(T count, T rho, T den, T rem) {
+  const T first = den - rem + rho - 1;  // i·den - rem + rho - 1 at i = 1
+  if (count > 8) return floor_sum<T>(count, rho, den, first);
+  T sum = 0;
+  for (T i = 0, num = first; i < count; ++i, num += den) sum += num / rho;
   return sum;
+}
+
+int64_t carry_positions(int64_t count, const IntervalGrid& g, int64_t rem) {
+  return carry_positions<int64_t>(count, g.rho, g.den, rem);
+}
+
+// The steep walk (q = 0: several levels at one tick) in T: int64_t where the bounds below
+// fit, else __int128. With the roles of ticks and levels swapped, tick i (1, 2, ...) after
+// the walk's interval is the interval of the i-th carry, j_i = ceil((i·den - rem)/rho),
+// at level L + dir·j_i; the 0-long intervals between carries add no phase. With den =
+// Q'·rho + rho' the level rises by Q' or Q' + 1 per tick (the dual Bresenham), and the
+// first m ticks add
+//   V(m) = m·L + dir·J(m),  J(m) = sum_{i=1}^{m} j_i = Q'·m(m+1)/2 + sum ceil((i·rho' - rem)/rho),
+// W(m)'s shape with one carry per tick: J is the floor sum of walk_to_step's carries.
+template <typename T>
+class SteepWalk {
+ public:
+  SteepWalk(const RampWalk& w, const IntervalGrid& g, int64_t dir)
+      : level_(w.level), rem_(w.rem), rho_(g.rho), den_(g.den), dir_(dir) {}
+
+  // The interval (counted from the walk's) of tick i >= 1.
+  T interval_of(T i) const { return (i * den_ - rem_ + rho_ - 1) / rho_; }
+  // The level of tick i.
+  T level_of(T i) const { return level_ + dir_ * interval_of(i); }
+  // V(m): the phase of the first m ticks.
+  T phase_of(T m) const { return m * level_ + dir_ * carry_positions<T>(m, rho_, den_, rem_); }
+
+  // Settles `m` (a guess in 1..most) to the first tick with V(m) >= left, `before` =
+  // V(m - 1); false (m = most) if V(most) < left, `before` = V(most - 1) then.
+  bool settle(int64_t& m, int64_t most, T left, T& before) const {
+    before = phase_of(m - 1);
+    while (m > 1 && before >= left) before -= level_of(--m);
+    for (T here; before + (here = level_of(m)) < left; ++m) {
+      if (m >= most) return false;
+      before += here;
+    }
+    return true;
+  }
+
+ private:
+  T level_, rem_, rho_, den_;
+  int64_t dir_;
+};
+
+// The ticks the room holds, C(room) = floor((rem + room·rho)/den), and the remainder after
+// the room's last interval.
+struct RoomEnd {
+  int64_t ticks = 0, rem = 0;
+};
+RoomEnd room_end(const IntervalGrid& g, int64_t rem, int64_t room) {
+  int64_t at = 0;
+  if (!__builtin_mul_overflow(room, g.rho, &at) && !__builtin_add_overflow(at, rem, &at))
+    return {at / g.den, at % g.den};
+  const __int128 wide = static_cast<__int128>(room) * g.rho + rem;
+  return {static_cast<int64_t>(wide / g.den), static_cast<int64_t>(wide % g.den)};
+}
+
+// The first tick whose level reaches the phase `left`: the real root of the continuous
+// V(x) = x·B + dir·x²·den/(2·rho), B = L + dir·(1/2 - rem/rho + den/(2·rho)) (each j_i's
+// ceiling taken as its mean, +1/2), in the form without cancellation
+// x = 2·left / (B + sqrt(B² + 2·dir·left·den/rho)), rounded up, in 1..most. The ceilings'
+// deviations from 1/2 stay within a few levels, so the guess is within a tick or two
+// (fewer the higher the levels).
+int64_t guess_tick(const RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left,
+                   int64_t most) {
+  const double zi = static_cast<double>(g.den) / static_cast<double>(g.rho);  // levels per tick
+  const double b = static_cast<double>(w.level) +
+                   static_cast<double>(dir) *
+                       (0.5 - static_cast<double>(w.rem) / static_cast<double>(g.rho) + zi / 2);
+  const double ld = static_cast<double>(left);
+  const double disc = std::max(b * b + 2.0 * static_cast<double>(dir) * ld * zi, 0.0);
+  const double x = 2.0 * ld / (b + std::sqrt(disc));
+  if (!(x < static_cast<double>(most))) return most;  // also where b + sqrt <= 0 (NaN, inf)
+  return std::clamp<int64_t>(static_cast<int64_t>(x) + 1, 1, most);
+}
+
+// A bound on the tick holding the step, in 1..ticks (the walk's answer is at most it, so
+// the values the solve computes are bounded by those at it): going up every tick adds more
+// than L and J(m) >= Q'·m(m-1)/2 + m, so m <= left/L + 1 and m < sqrt(2·left/Q') + 2;
+// going down each of the room's levels is >= 1, so m <= left. In doubles, with slack.
+int64_t tick_bound(const RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left,
+                   int64_t ticks) {
+  const double ld = static_cast<double>(left);
+  double most = ld + 2.0;
+  if (dir > 0) {
+    const double q_dual =
+        std::max(static_cast<double>(g.den) / static_cast<double>(g.rho) - 1, 1.0);
+    most = std::min(ld / static_cast<double>(w.level) + 2.0, std::sqrt(2.0 * ld / q_dual) + 3.0);
+  }
+  return most < static_cast<double>(ticks) ? static_cast<int64_t>(most) : ticks;
+}
+
+// Whether the steep solve's numbers up to tick `most` fit in int64_t: m·L, J(m) <=
+// m·min(m·den/rho + 1, room), i·den and the floor sum's lines below 2^61.
+bool steep_fits_64(const RampWalk& w, const IntervalGrid& g, int64_t room, int64_t most) {
+  const double m = static_cast<double>(most), den = static_cast<double>(g.den);
+  const double j = std::min(m * den / static_cast<double>(g.rho) + 1.0, static_cast<double>(room));
+  return std::max({m * static_cast<double>(w.level), m * j, (m + 2.0) * den}) < 0x1p61;
+}
+
+// walk_to_step for q = 0 in T: the tick holding the step, or the room's end. The guess is
+// kept within `bound` (tick_bound), so every value stays within T.
+template <typename T>
+bool walk_steep_in(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, int64_t left,
+                   const RoomEnd& end, int64_t bound) {
+  const SteepWalk<T> s(w, g, dir);
+  int64_t m = guess_tick(w, g, dir, left, bound);
+  T before = 0;
+  if (s.settle(m, end.ticks, left, before)) {
+    // Tick m: interval j of the walk, one tick long, its remainder rem + j·rho - m·den.
+    const T j = s.interval_of(m);
+    w.t = w.end + m - 1;
+    w.end = w.t + 1;
+    w.level += dir * static_cast<int64_t>(j);
+    w.left = left - static_cast<int64_t>(before);
+    w.passed += static_cast<int64_t>(j);
+    w.rem = static_cast<int64_t>(w.rem + j * g.rho - static_cast<T>(m) * g.den);
+    return true;
+  }
+  // No step within the room: w at its last interval, as the generator leaves it there
+  // (one tick long if the last tick's carry is the room's last interval, else 0 long at
+  // the room's last tick).
+  const bool last_carries = s.interval_of(m) == room;
+  const T through = last_carries ? before : before + s.level_of(m);
+  w.t = w.end + m - (last_carries ? 1 : 0);
+  w.end += m;
+  w.level += dir * room;
+  w.left = left - static_cast<int64_t>(through);
+  w.passed += room;
+  w.rem = end.rem;
+  return false;
+}
+
+// walk_to_step for q = 0 (see the header).
+bool walk_steep(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
+  if (room <= 0 || g.rho <= 0) return false;
+  const int64_t left = w.left - w.level * (w.end - w.t);  // after this interval
+  const RoomEnd end = room_end(g, w.rem, room);
+  if (end.ticks == 0) {  // every interval in the room 0 long
+    w.t = w.end;
+    w.left = left;
+    w.level += dir * room;
+    w.passed += room;
+    w.rem = end.rem;
+    return false;
+  }
+  const int64_t bound = tick_bound(w, g, dir, left, end.ticks);
+  if (steep_fits_64(w, g, room, bound))
+    return walk_steep_in<int64_t>(w, g, dir, room, left, end, bound);
+  return walk_steep_in<__int128>(w, g, dir, room, left, end, bound);
 }
 
 }  // namespace
 
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
   const int64_t q = g.q, rho = g.rho, den = g.den, level = w.level, rem = w.rem;
-  if (q == 0 || room <= 0) return false;
+  if (q == 0) return walk_steep(w, g, dir, room);
+  if (room <= 0) return false;
   const int64_t phase = level * (w.end - w.t);
   const int64_t left = w.left - phase;  // after this interval
   // Interval j = 1, 2, ... after this one runs at level L + dir·j for q + c_j ticks, c_j
@@ -183,9 +337,7 @@ bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) 
     w.rem += g.rho;
     const bool carry = w.rem >= g.den;
     w.rem -= carry ? g.den : 0;
-    const Tick len = g.q + (carry ? 1 : 0);
-    if (len == 0) return false;
-    w.end = w.t + len;
+    w.end = w.t + g.q + (carry ? 1 : 0);  // 0 long at q = 0: its level adds no phase
   }
   return true;
 }

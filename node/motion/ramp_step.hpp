@@ -10,8 +10,10 @@
 // and the interval in it that holds the step is the first n with P(n) >= the phase still to
 // come: a quadratic. The walk therefore goes from carry to carry (one every den/rho
 // intervals) and solves the run it ends in, instead of visiting each of the tens of levels
-// a step spans on the grids the profiles choose. Every answer is the level-by-level walk's
-// (the reference in the tests).
+// a step spans on the grids the profiles choose. With q = 0 (Z < 1) a run of 0-long
+// intervals follows each 1-long one instead: the walk goes from tick to tick, solved the
+// same way (ramp_step.cpp). Every answer is the level-by-level walk's (the reference in
+// the tests).
 #pragma once
 #include <cstdint>
 
@@ -34,12 +36,14 @@ struct RampWalk {
 
 // Moves w into the interval in which the step falls (level * (end - t) >= left), at most
 // `room` level changes on (where the ramp has its top or its end), w's own interval not
-// holding it (the caller has looked). False, w anywhere, if the step lies beyond that or
-// the grid has intervals of 0 ticks (several levels at one tick: the generator's own loop
-// takes those). Levels in a ramp are >= 1.
+// holding it (the caller has looked). False if the step lies beyond that: w anywhere, or
+// with intervals of 0 ticks (q = 0: several levels at one tick, a slope steeper than one
+// level per tick) at the room's last interval, where the generator's own loop would be
+// (ramp_step.cpp: the walk from tick to tick solved as the ramp with the roles of ticks
+// and levels swapped). Levels in a ramp are >= 1.
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);
 
-// The reference: the same walk one level at a time.
+// The reference: the same walk one level at a time (0-long intervals pass, adding no phase).
 bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);
 
 }  // namespace stepnode::motion

@@ -182,6 +182,8 @@ bool StepGenerator::next(Step& out) {
     // ticks the step needs against the interval's end, without the division; level times
     // an interval's length is of the order of the ramp's ticks, far inside int64).
     if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
+      // At the step's interval or the ramp's last plain one, solved.
+      if (cursor_.steep() && !walked_ && solve_steep()) continue;
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
@@ -257,14 +259,9 @@ Tick StepGenerator::peek_plain() {
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
-  // end_interval()'s cases other than one level up or down begin at this level: the ramp's
-  // top, or the level a ramp down ends or holds at.
-  const int64_t last =
-      up ? peak_level_
-         : std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) + 1;
   const int64_t dir = up ? 1 : -1;
-  const int64_t plain = up ? last - level_ : level_ - last;  // level changes before `last`
-  int64_t level = level_, left = d - acc_, passed = 0;       // left: phase still to come
+  const int64_t plain = plain_levels();
+  int64_t level = level_, left = d - acc_, passed = 0;  // left: phase still to come
   Tick t = t_, end = interval_end_;
   IntervalCursor cursor = cursor_;
   // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
@@ -282,7 +279,8 @@ Tick StepGenerator::peek_plain() {
     level += dir;
     ++passed;
     const Tick len = cursor.next_length();
-    if (len == 0) return kUnpeeked;  // levels at one tick: next() passes them at once
+    // Several levels at one tick (Z < 1): solved from the start, not walked level by level.
+    if (len == 0) return peek_far(dir, plain);
     end = t + len;
   }
   // next() goes on from there.
@@ -299,6 +297,29 @@ Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
   ahead_ = Ahead{true,  w.t,   ramp_.phase_per_step - w.left, w.level, interval_index_ + w.passed,
                  w.end, cursor};
   return w.t + (w.left + w.level - 1) / w.level;
+}
+
+int64_t StepGenerator::plain_levels() const {
+  if (phase_ == MotionPhase::Accelerating) return peak_level_ - level_;
+  return level_ - std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) -
+         1;
+}
+
+bool StepGenerator::solve_steep() {
+  // Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2): the walk to the step or the
+  // ramp's last plain level, solved (ramp_step.hpp), not one loop turn per tick.
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
+  const int64_t room = plain_levels();
+  if (!cursor_.steep() || room <= 0) return false;
+  const int64_t d = ramp_.phase_per_step;
+  RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
+  walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
+  t_ = w.t, acc_ = d - w.left, level_ = w.level;
+  interval_index_ += w.passed, interval_end_ = w.end;
+  cursor_.advance(w.passed, w.rem);
+  return true;
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {
@@ -371,115 +392,6 @@ void StepGenerator::halt(Tick at) {
   t_ = std::max(t_, at);
   phase_ = MotionPhase::Idle;
   marks_.end = t_;
-}
-
-}  // namespace stepnode::motion
-
-namespace stepnode::motion {
-
-void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
-  peeked_ = kUnpeeked;  // the next step may move
-  if (scurve_ && phase_ != MotionPhase::Idle && !stopping_) {
-    s_.p->change_velocity(
-        at, static_cast<double>(level) * kClockHz / static_cast<double>(ramp_.phase_per_step));
-    return s_follow();
-  }
-  if (phase_ == MotionPhase::Idle || stopping_ || (distance_ && then)) return;
-  advance_to(at);
-  // Never below one level: at level 0 the motion would stand still for ever and the next
-  // step's time divides by the level (a 0 Hz minimum makes base_level 0).
-  level = std::max({level, ramp_.base_level, int64_t{1}});
-  // Already ramping down to the target: a lower velocity leaves that ramp as it is (slowing
-  // to it first at the same deceleration ends at the same place and time); a higher one
-  // ramps up again.
-  if (distance_ && phase_ == MotionPhase::Decelerating && !holding_ && level <= level_) return;
-  then_ = then;
-  if (level > level_) {
-    // Intervals at level+1 .. target, Z_A each (the same convention as a start).
-    peak_level_ = level;
-    phase_ = MotionPhase::Accelerating;
-    ++level_;
-    interval_index_ = 0;
-    interval_end_ = t_ + interval_length(ramp_.accel_ticks_per_level, 0);
-  } else if (level < level_) {
-    decel_floor_ = level;
-    holding_ = true;  // hold the lower velocity, even the base one, instead of stopping
-    peak_level_ = level;
-    phase_ = MotionPhase::Decelerating;
-    marks_.decel_start = t_;
-    interval_index_ = 0;
-    interval_end_ = t_ + interval_length(ramp_.decel_ticks_per_level, 0);
-  } else {
-    phase_ = MotionPhase::Running;  // already there: hold it
-    plan_decel();
-    reached_velocity();
-  }
-}
-
-void StepGenerator::reached_velocity() {
-  if (!then_) return;
-  RampSpec ramp = *then_;
-  then_.reset();
-  adopt(ramp, ramp.run_level);
-}
-
-void StepGenerator::set_level(Tick at, int64_t level) {
-  peeked_ = kUnpeeked;  // the next step may move
-  if (phase_ == MotionPhase::Idle) return;
-  leave_s_curve(at);
-  advance_to(at);
-  level_ = std::max<int64_t>(level, 1);
-  ramp_.base_level = ramp_.run_level = level_;  // a constant velocity: nothing to ramp
-  ramp_.min_creep_level = level_;
-  phase_ = MotionPhase::Creeping;
-  stopping_ = holding_ = false;
-  then_.reset();
-  distance_.reset();
-}
-
-void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
-  peeked_ = kUnpeeked;  // the next step may move
-  if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
-  leave_s_curve(at);
-  advance_to(at);
-  then_.reset();
-  const auto level = static_cast<int64_t>(
-      (static_cast<__int128>(level_) * ramp.phase_per_step + ramp_.phase_per_step / 2) /
-      ramp_.phase_per_step);
-  adopt(ramp, level);
-}
-
-void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
-  // The phase accumulator keeps its fraction of a step: acc/D is the same on both grids
-  // (rounded down, so 0 <= acc < D holds on the new one).
-  acc_ = static_cast<int64_t>(static_cast<__int128>(acc_) * ramp.phase_per_step /
-                              ramp_.phase_per_step);
-  ramp_ = ramp;
-  level_ = std::max<int64_t>(1, level);
-  phase_ = MotionPhase::Running;
-  holding_ = false;
-  peak_level_ = level_;
-  decel_floor_ = ramp_.base_level;
-  assert(acc_ >= 0 && acc_ < ramp_.phase_per_step);
-}
-
-void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
-  peeked_ = kUnpeeked;  // the next step may move
-  if (phase_ == MotionPhase::Idle) return;
-  if (scurve_) {
-    distance_ = steps_done_ + std::max<int64_t>(steps, 0);
-    if (steps <= 0) return halt(at);
-    s_.p->retarget(at, *distance_);
-    return s_follow();
-  }
-  advance_to(at);
-  distance_ = steps_done_ + std::max<int64_t>(steps, 0);
-  ramp_.decel_ticks_per_level = ramp.decel_ticks_per_level;
-  if (steps <= 0) {
-    halt(t_);
-    return;
-  }
-  if (phase_ == MotionPhase::Running) plan_decel();
 }
 
 }  // namespace stepnode::motion

@@ -28,6 +28,13 @@ class StepGenerator {
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out);
+  // next() with every ramp interval walked, none solved (the reference in the tests).
+  bool next_walked(Step& out) {
+    walked_ = true;
+    const bool stepped = next(out);
+    walked_ = false;
+    return stepped;
+  }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
     if (peeked_ >= 0) return peeked_;  // known (next() finds the one after a run's step)
@@ -99,6 +106,10 @@ class StepGenerator {
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
   std::optional<Tick> peek_unknown();
+  // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
+  // other cases: the ramp's top, or the level a ramp down ends or holds at.
+  int64_t plain_levels() const;
+  bool solve_steep();
   Tick peek_plain();
   Tick run_step_after() const;
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
@@ -142,6 +153,7 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
+  bool walked_ = false;           // next_walked(): every ramp interval walked, none solved
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_

@@ -13,6 +13,8 @@
 //   scurve  the same with 6086h = 3 and every 60A4h jerk 1,000,000 steps/s^3
 //   slow    CiA 402 PP at 1,000 steps/s^2 to 1,000 steps/s, 2,000 steps (the finest grid,
 //           64 levels per step/s: the first steps span thousands of levels)
+//   steep   CiA 402 PP at 10,000,000 steps/s^2 to 10,000 steps/s, 4,000 steps (Z = 0.49
+//           ticks per level: several levels at one tick, the first step 2,200 ticks away)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -45,6 +47,9 @@ bool kind_of(const char* name, Kind& k) {
     }
   } else if (std::strcmp(name, "slow") == 0) {
     k = {profile_ramp(1'000, 1'000, 1'000, profile_levels_per_hz(1'000)), 2'000};
+  } else if (std::strcmp(name, "steep") == 0) {
+    const int64_t a = 10'000'000;
+    k = {profile_ramp(10'000, a, a, profile_levels_per_hz(a)), 4'000};
   } else {
     return false;
   }
@@ -83,7 +88,8 @@ struct Totals {
 int main(int argc, char** argv) {
   Kind k;
   if (argc < 2 || !kind_of(argv[1], k)) {
-    std::fprintf(stderr, "usage: ramp_cost_bench horner|hp|cia402|scurve|slow [moves] [ramps]\n");
+    std::fprintf(stderr,
+                 "usage: ramp_cost_bench horner|hp|cia402|scurve|slow|steep [moves] [ramps]\n");
     return 2;
   }
   const int moves = argc > 2 ? std::atoi(argv[2]) : 20;

@@ -92,9 +92,14 @@ TEST(RampWalk, HugeLevelsAndStepsTakeTheWidePath) {
   });
 }
 
-TEST(RampWalk, IntervalsOfNoTicksAreLeftToTheGenerator) {
+TEST(RampWalk, IntervalsOfNoTicksAreSolvedTickByTick) {
+  // Z = 1/3: three levels at each tick, tick i at level 10 + 3i; the first 22 add 979 of
+  // the 1,000 phase to come, the 23rd holds the step (ramp_step_steep_test.cpp for more).
   RampWalk w{0, 0, 10, 1'000, 0, 0};
-  EXPECT_FALSE(walk_to_step(w, grid_of(1, 3), 1, 100));
+  EXPECT_TRUE(walk_to_step(w, grid_of(1, 3), 1, 100));
+  EXPECT_EQ(w.t, 22);
+  EXPECT_EQ(w.level, 79);
+  EXPECT_EQ(w.left, 21);
 }
 
 // A move's steps, peeking before each (as the axes do) or not.
