@@ -146,7 +146,7 @@ void SCurve::start(const JerkLimits& limits, Tick start, std::optional<int64_t> 
   last_ = start;
   steps_ = 0;
   distance_ = distance;
-  velocity_ = 0;
+  still_ = true;
   ended_ = false;
   hold_velocity_ = distance ? -1 : limits.velocity;
   replan(start, distance, limits.velocity, std::nullopt);

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "node/motion/s_curve_scale.hpp"
 #include "node/motion/timebase.hpp"
 
 namespace stepnode::motion {
@@ -58,8 +59,13 @@ class SCurve {
   Tick end() const { return end_; }
   int64_t steps() const { return steps_; }
   std::optional<int64_t> distance() const { return distance_; }
-  // At the last step (or change): the velocity in steps/s and what the motion does.
-  double velocity() const { return velocity_; }
+  // At the last step (or change): the velocity in steps/s and what the motion does. The
+  // velocity is the exact slope's (slope()), converted only when read.
+  double velocity() const { return scurve::to_double(slope()) / scurve::kV; }
+  // S dp/dtau at the last step: 6 T^2 steps/s, 0 before the first step and after the end.
+  __int128 slope() const { return still_ ? 0 : local_[cur_].b1; }
+  // Right after next_step(): that step was the quick search's (in the last step's segment).
+  bool last_step_quick() const { return pending_quick_; }
   Kind kind() const { return seg_ < count_ ? segs_[seg_].kind : Kind::Hold; }
   bool at_target_velocity() const {  // a velocity motion holds its velocity
     return !ended_ && hold_velocity_ >= 0 && kind() == Kind::Hold;
@@ -121,7 +127,7 @@ class SCurve {
   Tick last_ = 0;  // the last step's tick (or the start)
   int64_t steps_ = 0;
   std::optional<int64_t> distance_;
-  double velocity_ = 0;
+  bool still_ = true;          // no step yet, or ended: velocity 0
   double hold_velocity_ = -1;  // the velocity a velocity motion goes to
   bool ended_ = true;
   Tick end_ = 0;

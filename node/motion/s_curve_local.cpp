@@ -28,7 +28,8 @@ int SCurve::try_step(const Local& l, const Segment& g, Tick d, Local& n) {
   // moved to tau + d). Unsigned: the same products modulo 2^128, without sign extensions.
   using U = unsigned __int128;
   const U ud = static_cast<uint64_t>(d);
-  const U b2_0 = static_cast<U>(l.b2), jerk = static_cast<U>(static_cast<__int128>(g.c3)) * ud;
+  // c3 d: one 64 x 64 -> 128 bit product (both fit 64 bits signed).
+  const U b2_0 = static_cast<U>(l.b2), jerk = static_cast<U>(static_cast<__int128>(g.c3) * d);
   const U b2 = b2_0 + 3 * jerk;
   const U b1 = static_cast<U>(l.b1) + ud * (b2_0 + b2);
   const U rise = ud * (static_cast<U>(l.b1) + ud * (b2_0 + jerk));

@@ -8,8 +8,6 @@
 namespace stepnode::motion {
 using scurve::approx;
 using scurve::kS;
-using scurve::kV;
-using scurve::to_double;
 
 Tick SCurve::find(const Segment& g, Tick lo, __int128 target) {
   // The smallest tau in (lo, g.len] with g.at(tau) >= target, given g.at(lo) < target (the
@@ -79,7 +77,7 @@ std::optional<Tick> SCurve::next_step() {
   if (!t) {
     ended_ = true;
     if (distance_ && steps_ >= *distance_) end_ = last_;
-    velocity_ = 0;
+    still_ = true;
     return std::nullopt;
   }
   const Tick prev = last_;
@@ -92,7 +90,7 @@ std::optional<Tick> SCurve::next_step() {
   } else {
     seat_local(prev);
   }
-  velocity_ = to_double(local_[cur_].b1) / kV;  // b1 is the exact slope at this tick
+  still_ = false;  // velocity(): local_[cur_].b1, the exact slope at this tick
   if (distance_ && steps_ >= *distance_) {
     ended_ = true;
     end_ = last_;

@@ -80,8 +80,9 @@ class StepGenerator {
   MotionPhase phase() const { return phase_; }
   bool moving() const { return phase_ != MotionPhase::Idle; }
   bool stopping() const { return moving() && stopping_; }  // stop(): ramping down to end
-  int64_t level() const { return level_; }
-  double velocity() const { return phase_ == MotionPhase::Idle ? 0.0 : ramp_.velocity_of(level_); }
+  // An S-curve's level is computed when read (s_level()), not at every step.
+  int64_t level() const { return scurve_ && s_level_lazy_ ? s_level() : level_; }
+  double velocity() const { return phase_ == MotionPhase::Idle ? 0.0 : ramp_.velocity_of(level()); }
   int64_t steps_done() const { return steps_done_; }
   std::optional<int64_t> remaining() const;
   int direction() const { return direction_; }
@@ -123,6 +124,8 @@ class StepGenerator {
   void s_start(const RampSpec& ramp, Tick start, std::optional<int64_t> distance);
   bool s_next(Step& out);
   void s_follow();
+  void s_track_peak();
+  int64_t s_level() const;
   void leave_s_curve(Tick at);
   JerkLimits jerk_limits(const RampSpec& ramp) const;
   double slope_of(Rational z) const;
@@ -176,6 +179,13 @@ class StepGenerator {
   };
   SCurveSlot s_;
   bool scurve_ = false;  // the running motion is s_'s
+  // The S-curve's level is s_level()'s, from its state at the last step or change (level_
+  // is not kept); leave_s_curve() writes it into level_.
+  bool s_level_lazy_ = false;
+  bool s_at_target_ = false;  // it holds its target velocity: the level is the target's
+  // The highest slope whose level marks_.peak_level counts (a step at a slope up to this
+  // one cannot raise the peak: the level rises with the slope).
+  __int128 s_peak_slope_ = 0;
 };
 
 }  // namespace stepnode::motion

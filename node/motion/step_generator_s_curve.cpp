@@ -51,6 +51,8 @@ void StepGenerator::s_start(const RampSpec& ramp, Tick start, std::optional<int6
   marks_ = Marks{};
   marks_.start = start;
   level_ = 0;
+  s_level_lazy_ = s_at_target_ = false;
+  s_peak_slope_ = 0;
   if (!s_.p) s_.p = std::make_unique<SCurve>();
   if (distance && *distance <= 0) {
     phase_ = MotionPhase::Idle;
@@ -62,7 +64,8 @@ void StepGenerator::s_start(const RampSpec& ramp, Tick start, std::optional<int6
 }
 
 void StepGenerator::s_follow() {
-  // The phase and level the motion shows after its last step or change.
+  // The phase the motion shows after a change or a step in another segment (a step by the
+  // quick search stays in its segment: the same phase). The level is s_level()'s.
   const SCurve& s = *s_.p;
   using K = SCurve::Kind;
   switch (s.kind()) {
@@ -71,31 +74,60 @@ void StepGenerator::s_follow() {
     case K::Creep: phase_ = MotionPhase::Creeping; break;
     default: phase_ = MotionPhase::Running; break;
   }
-  const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
+  s_level_lazy_ = true;
+  s_at_target_ = s.at_target_velocity();
+  if (s_at_target_) {
+    marks_.peak_level = std::max(marks_.peak_level, s_level());
+  } else {
+    s_track_peak();
+  }
+}
+
+void StepGenerator::s_track_peak() {
+  // The peak of the levels at every step, without the level of each: level_of(), the
+  // conversions and the scale all rise with the slope, so a slope up to the highest one
+  // counted so far cannot raise the peak (not holding the target: the level is the slope's).
+  const __int128 slope = s_.p->slope();
+  if (slope <= s_peak_slope_) return;
+  s_peak_slope_ = slope;
+  marks_.peak_level = std::max(marks_.peak_level, s_level());
+}
+
+int64_t StepGenerator::s_level() const {
   // Holding a velocity: exactly its level (the phases on whole ticks leave it within a few
-  // millionths); otherwise the velocity at the last step.
+  // millionths); otherwise the velocity at the last step. The S-curve's state is the one
+  // the last step or change left (peek() does not move it).
+  const SCurve& s = *s_.p;
+  const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
   const double v = s.at_target_velocity() ? s.target_velocity() : s.velocity();
-  level_ = level_of(v * lph);
-  marks_.peak_level = std::max(marks_.peak_level, level_);
+  return level_of(v * lph);
 }
 
 bool StepGenerator::s_next(Step& out) {
   if (phase_ == MotionPhase::Idle) return false;
-  const std::optional<Tick> t = s_.p->next_step();
+  SCurve& s = *s_.p;
+  const std::optional<Tick> t = s.next_step();
   if (!t) {
     phase_ = MotionPhase::Idle;
-    t_ = std::max(t_, s_.p->end());
+    t_ = std::max(t_, s.end());
     marks_.end = t_;
     level_ = 0;
+    s_level_lazy_ = false;
     return false;
   }
   t_ = *t;
   ++steps_done_;
   out = Step{t_, direction_};
-  s_follow();
-  if (s_.p->ended()) {
+  if (s.ended()) {
+    s_follow();
+    level_ = s_level();  // kept while idle (a start without steps leaves it)
+    s_level_lazy_ = false;
     phase_ = MotionPhase::Idle;
     marks_.end = t_;
+  } else if (!s.last_step_quick()) {
+    s_follow();
+  } else if (!s_at_target_) {
+    s_track_peak();
   }
   return true;
 }
@@ -104,10 +136,11 @@ void StepGenerator::leave_s_curve(Tick at) {
   // A cyclic mode takes over a jerk-limited motion: the trapezoid's state at its velocity,
   // the phase accumulator empty (at most a fraction of a step late).
   if (!scurve_) return;
+  level_ = std::max<int64_t>(level(), 1);
+  s_level_lazy_ = false;
   scurve_ = false;
   t_ = std::max(t_, at);
   acc_ = 0;
-  level_ = std::max<int64_t>(level_, 1);
   phase_ = MotionPhase::Running;
   holding_ = stopping_ = false;
   decel_tick_ = -1;
