@@ -30,6 +30,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
     direction_ = direction >= 0 ? +1 : -1;
     return s_start(ramp, start, distance);
   }
+  if (scurve_) level_ = level();  // an S-curve's level is computed when read: kept here
   scurve_ = false;
   ramp_ = ramp;
   direction_ = direction >= 0 ? +1 : -1;
