@@ -263,7 +263,44 @@ bool walk_steep(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
   return walk_steep_in<__int128>(w, g, dir, room, left, end, bound);
 }
 
+// Where the generator's loop parks at tick `until` = the start of tick m (1 <= m, tick m's
+// interval strictly inside the room, no step before it): past the interval that ends
+// there, and past the 0-long ones after it but the last (skip_empty_intervals() leaves the
+// motion on that one), or on tick m's interval if none is 0 long.
+template <typename T>
+void park_at_tick(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left, int64_t m) {
+  const SteepWalk<T> s(w, g, dir);
+  const T carry = s.interval_of(m);                      // tick m's interval
+  const T ending = m > 1 ? s.interval_of(m - 1) : T{0};  // the one that ends at `until`
+  const bool zeros = carry - 1 > ending;
+  const T j = zeros ? carry - 1 : carry;
+  const T carries = zeros ? m - 1 : m;  // carries among intervals 1..j
+  w.t = w.end + m - 1;
+  w.end = w.t + (zeros ? 0 : 1);
+  w.level += dir * static_cast<int64_t>(j);
+  w.left = left - static_cast<int64_t>(s.phase_of(m - 1));
+  w.passed += static_cast<int64_t>(j);
+  w.rem = static_cast<int64_t>(w.rem + j * g.rho - carries * g.den);
+}
+
 }  // namespace
+
+void walk_steep_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
+  RampWalk to_step = w;
+  walk_steep(to_step, g, dir, room);
+  // The step's interval, or the room's last, begun before `until` (or the room's last, 0
+  // long, at it): the generator's loop passes every interval before it (none holds the
+  // step, each ends by `until`) and stops there.
+  if (to_step.t < until || (to_step.t == until && to_step.end == until)) {
+    w = to_step;
+    return;
+  }
+  // Else it stops at `until`, the start of tick m after w's interval, inside the room.
+  const int64_t left = w.left - w.level * (w.end - w.t);
+  const int64_t m = until - w.end + 1;
+  if (steep_fits_64(w, g, room, m)) park_at_tick<int64_t>(w, g, dir, left, m);
+  else park_at_tick<__int128>(w, g, dir, left, m);
+}
 
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
   const int64_t q = g.q, rho = g.rho, den = g.den, level = w.level, rem = w.rem;

@@ -28,13 +28,9 @@ class StepGenerator {
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out);
-  // next() with every ramp interval walked, none solved (the reference in the tests).
-  bool next_walked(Step& out) {
-    walked_ = true;
-    const bool stepped = next(out);
-    walked_ = false;
-    return stepped;
-  }
+  // From now on every ramp interval of a slope steeper than a level per tick walked, none
+  // solved, in next() and in the changes of a running motion (the reference in the tests).
+  void walk_steep_ramps(bool on) { walked_ = on; }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
     if (peeked_ >= 0) return peeked_;  // known (next() finds the one after a run's step)
@@ -110,7 +106,7 @@ class StepGenerator {
   // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
   // other cases: the ramp's top, or the level a ramp down ends or holds at.
   int64_t plain_levels() const;
-  bool solve_steep();
+  bool solve_steep(Tick until = kNever);
   Tick peek_plain();
   Tick run_step_after() const;
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
@@ -140,6 +136,7 @@ class StepGenerator {
   // generator for every step): a step time, or one of these. next() sets it in a run or a
   // creep; every other change of the motion resets it.
   static constexpr Tick kUnpeeked = -2, kNoStep = -1;
+  static constexpr Tick kNever = INT64_MAX;  // solve_steep(): no tick to stop at
   Tick peeked_ = kUnpeeked;
   int64_t acc_ = 0;  // phase accumulator, 0 <= acc_ < phase_per_step
   int64_t level_ = 0;
@@ -156,7 +153,7 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
-  bool walked_ = false;           // next_walked(): every ramp interval walked, none solved
+  bool walked_ = false;           // walk_steep_ramps(): every ramp interval walked
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_

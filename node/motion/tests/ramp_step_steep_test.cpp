@@ -2,7 +2,8 @@
 // walk from tick to tick that passes each run of 0-long intervals at once as the generator
 // does (and that walk against the level-by-level one where levels are few), every field
 // compared, on the step and at the room's end; and the generator's steps on random steep
-// moves changed mid-way against its own step loop with no solve (next_walked()).
+// moves changed mid-way, at a step or between two, against its own step loop with no
+// solve (walk_steep_ramps()).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,22 +29,26 @@ int64_t pick_size(std::mt19937_64& rng, int64_t hi) {
 // The reference: one tick at a time, the 0-long intervals after a 1-long one passed
 // together (their count the remainder's room before it carries), at most to the room, as
 // StepGenerator::end_interval() and skip_empty_intervals() pass them.
+void pass_interval(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
+  w.left -= w.level * (w.end - w.t);
+  w.t = w.end;
+  w.level += dir;
+  ++w.passed;
+  w.rem += g.rho;
+  const bool carry = w.rem >= g.den;
+  w.rem -= carry ? g.den : 0;
+  w.end = w.t + (carry ? 1 : 0);
+  if (carry) return;
+  const int64_t zeros = std::min((g.den - 1 - w.rem) / g.rho, room - w.passed);
+  w.rem += zeros * g.rho;
+  w.passed += zeros;
+  w.level += dir * zeros;
+}
+
 bool walk_ticks(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
-  for (int64_t phase; (phase = w.level * (w.end - w.t)) < w.left;) {
+  while (w.level * (w.end - w.t) < w.left) {
     if (w.passed >= room) return false;
-    w.left -= phase;
-    w.t = w.end;
-    w.level += dir;
-    ++w.passed;
-    w.rem += g.rho;
-    const bool carry = w.rem >= g.den;
-    w.rem -= carry ? g.den : 0;
-    w.end = w.t + (carry ? 1 : 0);
-    if (carry) continue;
-    const int64_t zeros = std::min((g.den - 1 - w.rem) / g.rho, room - w.passed);
-    w.rem += zeros * g.rho;
-    w.passed += zeros;
-    w.level += dir * zeros;
+    pass_interval(w, g, dir, room);
   }
   return true;
 }
@@ -166,6 +171,52 @@ TEST(SteepWalk, TheTickWalkIsTheLevelWalk) {
   }
 }
 
+// The reference of walk_steep_until: StepGenerator::advance_to()'s loop, an interval at a
+// time (the 0-long ones after a 1-long one together), passing each that holds no step and
+// ends by `until` until it reaches that tick, at most to the room.
+void walk_ticks_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
+  while (w.level * (w.end - w.t) < w.left && w.end <= until && w.t < until && w.passed < room)
+    pass_interval(w, g, dir, room);
+}
+
+TEST(SteepWalk, UntilATickIsTheTickWalks) {
+  // advance_to() between two steps: to the interval of the step, of `until`, or the room's
+  // last, whichever comes first; every field against the loop's.
+  std::mt19937_64 rng(304);
+  int at_tick = 0, at_step = 0, at_room = 0;
+  for (int i = 0; i < 100'000 && !::testing::Test::HasFailure(); ++i) {
+    const IntervalGrid g = rng() % 2
+                               ? IntervalGrid{0, kClockHz, pick(rng, kClockHz + 1, 2'000'000'000)}
+                               : steep_grid(rng, 1e-6, int64_t{1} << 40);
+    const int64_t dir = rng() % 2 ? 1 : -1;
+    int64_t room = 0;
+    const RampWalk start = steep_start(rng, g, dir, 1'000'000, 3'000, room);
+    if (start.level * (start.end - start.t) >= start.left || room <= 0) continue;
+    RampWalk to_step = start;
+    walk_ticks(to_step, g, dir, room);
+    // After w's tick and at or after its interval's end, as advance_to() calls it.
+    const Tick first = std::max(start.end, start.t + 1);
+    const Tick until = first + pick(rng, 0, std::max<Tick>(to_step.t - first + 2, 0));
+    RampWalk walked = start, solved = start;
+    walk_ticks_until(walked, g, dir, room, until);
+    walk_steep_until(solved, g, dir, room, until);
+    expect_same(walked, solved);
+    if (::testing::Test::HasFailure()) {
+      ADD_FAILURE() << "rho " << g.rho << " den " << g.den << " L " << start.level << " left "
+                    << start.left << " rem " << start.rem << " end-t " << start.end - start.t
+                    << " dir " << dir << " room " << room << " until-end " << until - start.end;
+    }
+    const bool holds_step = walked.level * (walked.end - walked.t) >= walked.left;
+    at_step += holds_step ? 1 : 0;
+    at_tick += !holds_step && walked.t == until ? 1 : 0;  // its interval, or a 0-long one at it
+    at_room += !holds_step && walked.t < until ? 1 : 0;
+  }
+  // Each way of stopping was tried.
+  EXPECT_GT(at_tick, 10'000);
+  EXPECT_GT(at_step, 10'000);
+  EXPECT_GT(at_room, 2'000);
+}
+
 TEST(SteepWalk, ThreeLevelsPerTick) {
   // Z = 1/3 from level 10, 1,000 phase to come: tick i runs at level 10 + 3i, the first
   // 22 add 979, the 23rd (level 79) holds the step.
@@ -186,22 +237,30 @@ enum class Taking { Peeked, Next, Walked };
 std::vector<Tick> run(const RampSpec& r, int64_t distance, Taking taking, std::mt19937_64 rng,
                       int changes, Rational quick) {
   StepGenerator g;
+  g.walk_steep_ramps(taking == Taking::Walked);
   g.start(r, 0, 1, distance > 0 ? std::optional<int64_t>(distance) : std::nullopt);
   std::vector<Tick> out;
   Step s;
   int64_t change_at = pick(rng, 1, 300);
   while (out.size() < 20'000) {
     if (taking == Taking::Peeked && !g.peek()) break;
-    if (!(taking == Taking::Walked ? g.next_walked(s) : g.next(s))) break;
+    if (!g.next(s)) break;
     out.push_back(s.time);
     if (changes > 0 && static_cast<int64_t>(out.size()) == change_at) {
       --changes;
       change_at += pick(rng, 1, 300);
+      // At the step, or (3 in 4) a tick before the next one: the generator first passes
+      // the ticks between (advance_to), up to thousands of them near rest.
+      const double within = rng() % 4 == 0 ? 0.0 : std::uniform_real_distribution<>(0, 1)(rng);
+      StepGenerator ahead = g;
+      Step following;
+      const Tick gap = ahead.next(following) ? following.time - s.time : 0;
+      const Tick at = s.time + static_cast<Tick>(within * static_cast<double>(gap));
       switch (rng() % 4) {
-        case 0: g.change_velocity(s.time, pick(rng, 1, r.run_level)); break;
-        case 1: g.retarget(s.time, pick(rng, 1, 3'000), r); break;
-        case 2: g.stop(s.time); break;
-        default: g.stop(s.time, quick); break;
+        case 0: g.change_velocity(at, pick(rng, 1, r.run_level)); break;
+        case 1: g.retarget(at, pick(rng, 1, 3'000), r); break;
+        case 2: g.stop(at); break;
+        default: g.stop(at, quick); break;
       }
     }
   }
