@@ -204,8 +204,10 @@ int64_t tick_bound(const RampWalk& w, const IntervalGrid& g, int64_t dir, int64_
 }
 
 // Whether the steep solve's numbers up to tick `most` fit in int64_t: m·L, J(m) <=
-// m·min(m·den/rho + 1, room), i·den and the floor sum's lines below 2^61.
-bool steep_fits_64(const RampWalk& w, const IntervalGrid& g, int64_t room, int64_t most) {
+// m·min(m·den/rho + 1, room), i·den and the floor sum's lines below 2^61. Inlined: a call
+// for every steep ramp step costs as much as the test.
+[[gnu::always_inline]] inline bool steep_fits_64(const RampWalk& w, const IntervalGrid& g,
+                                                 int64_t room, int64_t most) {
   const double m = static_cast<double>(most), den = static_cast<double>(g.den);
   const double j = std::min(m * den / static_cast<double>(g.rho) + 1.0, static_cast<double>(room));
   return std::max({m * static_cast<double>(w.level), m * j, (m + 2.0) * den}) < 0x1p61;
@@ -287,7 +289,7 @@ void park_at_tick(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left,
 
 void walk_steep_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
   RampWalk to_step = w;
-  walk_steep(to_step, g, dir, room);
+  walk_to_step(to_step, g, dir, room);  // walk_steep, inlined in walk_to_step alone
   // The step's interval, or the room's last, begun before `until` (or the room's last, 0
   // long, at it): the generator's loop passes every interval before it (none holds the
   // step, each ends by `until`) and stops there.

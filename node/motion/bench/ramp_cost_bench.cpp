@@ -2,9 +2,10 @@
 // callgrind: it runs `moves` moves of one kind through StepGenerator (peek, then next, as
 // AxisCore does) inside run_moves(), and prints the steps it took.
 //   valgrind --tool=callgrind --toggle-collect='*run_moves*'
-//   build/node/ramp_cost_bench <kind> [moves] [ramps]
+//   build/node/ramp_cost_bench <kind> [moves] [ramps|stop-early|stop-early-walked]
 // then Ir (the "Collected" total) / steps. `ramps` stops each move as soon as it runs at its
-// velocity (a jog stopped at the top: the ramps alone, no cruise).
+// velocity (a jog stopped at the top: the ramps alone, no cruise); `stop-early` see
+// kStopAfter (then Ir / moves: the cost of a stop between two steps).
 // Kinds (one trapezoid for the last three: 0 -> 10,000 steps/s at 100,000 steps/s^2, 20,000
 // steps, so the ramps are 500 steps each way):
 //   horner  SPM30 %AQ3..7 = 20 1 8191 100 0 (245,730 steps/s, 100 ms ramps), 40,000 steps
@@ -56,20 +57,31 @@ bool kind_of(const char* name, Kind& k) {
   return true;
 }
 
+// `stop-early`: each move stopped this many ticks after its start (407 us; at 10^7
+// steps/s^2 before its first step, 2,200 ticks from rest: a stop between two steps).
+// `stop-early-walked`: the same with the steep ramps walked tick by tick, nothing solved.
+constexpr Tick kStopAfter = 2'000;
+
 struct Totals {
   int64_t steps = 0;
   Tick checksum = 0;
 };
 
 // Not inlined: callgrind's --toggle-collect names it.
-[[gnu::noinline]] Totals run_moves(const Kind& k, int moves, bool ramps_only) {
+enum class Mode { Whole, Ramps, StopEarly, StopEarlyWalked };
+
+[[gnu::noinline]] Totals run_moves(const Kind& k, int moves, Mode mode) {
   StepGenerator g;
+  g.walk_steep_ramps(mode == Mode::StopEarlyWalked);
+  const bool ramps_only = mode == Mode::Ramps;
   Totals out;
   Tick t = 0;
   for (int m = 0; m < moves; ++m) {
     g.start(k.ramp, t, m % 2 ? -1 : +1, k.steps);
+    const bool early = mode == Mode::StopEarly || mode == Mode::StopEarlyWalked;
+    if (early) g.stop(t + kStopAfter);
     Step s;
-    bool stopped = false;
+    bool stopped = early;
     while (g.peek() && g.next(s)) {
       ++out.steps;
       out.checksum += s.time;
@@ -89,14 +101,19 @@ int main(int argc, char** argv) {
   Kind k;
   if (argc < 2 || !kind_of(argv[1], k)) {
     std::fprintf(stderr,
-                 "usage: ramp_cost_bench horner|hp|cia402|scurve|slow|steep [moves] [ramps]\n");
+                 "usage: ramp_cost_bench horner|hp|cia402|scurve|slow|steep [moves] "
+                 "[ramps|stop-early|stop-early-walked]\n");
     return 2;
   }
   const int moves = argc > 2 ? std::atoi(argv[2]) : 20;
-  const bool ramps_only = argc > 3 && std::strcmp(argv[3], "ramps") == 0;
-  const Totals t = run_moves(k, moves, ramps_only);
-  std::printf("%s: %lld steps in %d moves%s (checksum %lld)\n", argv[1],
-              static_cast<long long>(t.steps), moves, ramps_only ? ", ramps only" : "",
+  const char* how = argc > 3 ? argv[3] : "";
+  Mode mode = Mode::Whole;
+  if (std::strcmp(how, "ramps") == 0) mode = Mode::Ramps;
+  if (std::strcmp(how, "stop-early") == 0) mode = Mode::StopEarly;
+  if (std::strcmp(how, "stop-early-walked") == 0) mode = Mode::StopEarlyWalked;
+  const Totals t = run_moves(k, moves, mode);
+  std::printf("%s: %lld steps in %d moves%s%s (checksum %lld)\n", argv[1],
+              static_cast<long long>(t.steps), moves, *how != 0 ? ", " : "", how,
               static_cast<long long>(t.checksum % 1'000'003));
   return 0;
 }
