@@ -222,6 +222,8 @@ void StepGenerator::end_interval() {
       // every step, and at a constant level that answer is all a peek would compute.
       ahead_.valid = false;
       peeked_ = run_step_after();
+    } else {
+      peeked_ = peek_plain();  // in a ramp: the same, through its plain level changes
     }
     return true;
   }
@@ -266,30 +268,39 @@ Tick StepGenerator::run_step_after() const {
   if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
   const int64_t dir = up ? 1 : -1;
   const int64_t plain = plain_levels();
-  int64_t level = level_, left = d - acc_, passed = 0;  // left: phase still to come
-  Tick t = t_, end = interval_end_;
-  IntervalCursor cursor = cursor_;
+  int64_t level = level_, left = d - acc_;  // left: phase still to come
+  Tick len = interval_end_ - t_, end = interval_end_;
+  int64_t phase = level * len;  // far inside int64 where no step falls: below one step's phase
+  if (phase >= left) return t_ + (left + level - 1) / level;
+  if (plain <= 0) return kUnpeeked;
   // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
-  // (q + 1)·kWalked·(L + kWalked)): solved at once (ramp_step.hpp), not walked.
-  if (const int64_t here = level * (end - t); here < left) {
-    const double most = static_cast<double>(cursor.grid().q + 1) * static_cast<double>(kWalked) *
-                        static_cast<double>(level + kWalked);
-    if (most < static_cast<double>(left - here)) return peek_far(dir, plain);
-  }
-  // level * length stays far inside int64 where no step falls: below one step's phase.
-  for (int64_t phase; (phase = level * (end - t)) < left;) {
-    if (passed >= plain) return kUnpeeked;
+  // (q + 1)·kWalked·(L + kWalked)), or several levels at one tick (Z < 1): solved at once
+  // (ramp_step.hpp), not walked.
+  const IntervalGrid g = cursor_.grid();
+  const double most = static_cast<double>(g.q + 1) * static_cast<double>(kWalked) *
+                      static_cast<double>(level + kWalked);
+  if (cursor_.steep() || most < static_cast<double>(left - phase)) return peek_far(dir, plain);
+  // The walk with the cursor's additions (ramp_intervals.hpp) in registers: the interval
+  // lengths are q or q + 1 (q >= 1 here), the phase of each its level times its length.
+  const int64_t last = level + dir * plain;  // the ramp's last plain level
+  int64_t rem = cursor_.remainder();
+  do {
+    if (level == last) return kUnpeeked;
     left -= phase;
-    t = end;
     level += dir;
-    ++passed;
-    const Tick len = cursor.next_length();
-    // Several levels at one tick (Z < 1): solved from the start, not walked level by level.
-    if (len == 0) return peek_far(dir, plain);
-    end = t + len;
-  }
+    rem += g.rho;
+    const bool carry = rem >= g.den;
+    rem -= carry ? g.den : 0;
+    len = g.q + (carry ? 1 : 0);
+    end += len;
+    phase = level * len;
+  } while (phase < left);
   // next() goes on from there.
-  if (passed > 0) ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
+  const Tick t = end - len;
+  const int64_t passed = (level - level_) * dir;
+  IntervalCursor cursor = cursor_;
+  cursor.advance(passed, rem);
+  ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
   return t + (left + level - 1) / level;
 }
 
