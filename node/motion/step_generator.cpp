@@ -173,6 +173,8 @@ void StepGenerator::end_interval() {
   }
   // A peek() that walked plain ramp intervals left where it got to: start from there.
   if (ahead_.valid && peeked_ != kUnpeeked) ahead_.restore(*this);
+  // >= 0: the step, in this interval, before any turn (peek_plain(), run_step_after()).
+  Tick known = peeked_;
   peeked_ = kUnpeeked;  // the next step may move
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
@@ -181,25 +183,30 @@ void StepGenerator::end_interval() {
     // The invariants every front end's input must keep (checked in the sanitizer build): a
     // moving level (the next step's time divides by it) and a phase inside one step.
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
-    bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-    // A ramp interval whose whole phase stays below d has no step (the same test as the
-    // ticks the step needs against the interval's end, without the division; level times
-    // an interval's length is of the order of the ramp's ticks, far inside int64).
-    if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
-      // At the step's interval or the ramp's last plain one, solved.
-      if (cursor_.steep() && !walked_ && solve_steep()) continue;
-      acc_ += level_ * (interval_end_ - t_);
-      t_ = interval_end_;
-      end_interval();
-      continue;
+    Tick need = known - t_;  // ticks until the accumulator passes d
+    if (known < 0) {
+      const bool ramping =
+          phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+      // A ramp interval whose whole phase stays below d has no step (the same test as the
+      // ticks the step needs against the interval's end, without the division; level
+      // times an interval's length is of the order of the ramp's ticks, far inside int64).
+      if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
+        // At the step's interval or the ramp's last plain one, solved.
+        if (cursor_.steep() && !walked_ && solve_steep()) continue;
+        acc_ += level_ * (interval_end_ - t_);
+        t_ = interval_end_;
+        end_interval();
+        continue;
+      }
+      need = (d - acc_ + level_ - 1) / level_;
+      if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
+        acc_ += level_ * (decel_tick_ - t_);
+        t_ = decel_tick_;
+        begin_decel();
+        continue;
+      }
     }
-    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
-    if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
-      acc_ += level_ * (decel_tick_ - t_);
-      t_ = decel_tick_;
-      begin_decel();
-      continue;
-    }
+    known = kUnpeeked;
     t_ += need;
     acc_ += level_ * need - d;
     ++steps_done_;
@@ -242,11 +249,14 @@ std::optional<Tick> StepGenerator::peek_unknown() {
     }
   }
   if (peeked_ == kUnpeeked) {
+    // Found by a copy: not in this interval, so kept apart from peeked_ (next()'s known step).
     StepGenerator copy = *this;
     Step s;
-    peeked_ = copy.next(s) ? s.time : kNoStep;
+    copied_ = copy.next(s) ? s.time : kNoStep;
+    peeked_ = kCopied;
   }
-  return peeked_ == kNoStep ? std::nullopt : std::optional<Tick>(peeked_);
+  const Tick at = peeked_ == kCopied ? copied_ : peeked_;
+  return at == kNoStep ? std::nullopt : std::optional<Tick>(at);
 }
 
 Tick StepGenerator::run_step_after() const {

@@ -133,11 +133,14 @@ class StepGenerator {
   int64_t peak_level_ = 0;
   Tick t_ = 0;  // time of the last event (step or level change)
   // peek()'s answer until the motion changes (a plain tick: the hot path copies the
-  // generator for every step): a step time, or one of these. next() sets it in a run or a
-  // creep; every other change of the motion resets it.
-  static constexpr Tick kUnpeeked = -2, kNoStep = -1;
+  // generator for every step): a step time, or one of these. next() sets it after each
+  // step; every other change of the motion resets it. A time here is the step next()
+  // takes in the current interval (or ahead_'s), without the division; the answer a copy
+  // of the generator found is copied_ (kCopied here).
+  static constexpr Tick kUnpeeked = -2, kNoStep = -1, kCopied = -3;
   static constexpr Tick kNever = INT64_MAX;  // solve_steep(): no tick to stop at
   Tick peeked_ = kUnpeeked;
+  Tick copied_ = kNoStep;
   int64_t acc_ = 0;  // phase accumulator, 0 <= acc_ < phase_per_step
   int64_t level_ = 0;
   Tick interval_end_ = 0;  // end of the current ramp interval
