@@ -163,18 +163,57 @@ void StepGenerator::end_interval() {
   skip_empty_intervals(level_ - floor);
 }
 
-// next() and peek_plain() on 64-byte boundaries: their loops run at a very high rate of
-// instructions per cycle, and where a merge elsewhere in the file moved them, the same
-// code took 5-9 % more user time (Horner's ramps in ramp_cost_bench; README "Figures").
-[[gnu::aligned(64)]] bool StepGenerator::next(Step& out) {
+// Inlined in both callers: a call more per step costs ~15 % in a run (6.5 ns a step).
+[[gnu::always_inline]] inline bool StepGenerator::took_step(Step& out) {
+  // The step at t_ is taken: counted, and what follows it decided.
+  ++steps_done_;
+  switch (phase_) {
+    case MotionPhase::Accelerating: ++marks_.accel_steps; break;
+    case MotionPhase::Running: ++marks_.run_steps; break;
+    case MotionPhase::Decelerating: ++marks_.decel_steps; break;
+    default: ++marks_.creep_steps; break;
+  }
+  out = Step{t_, direction_};
+  if (distance_ && steps_done_ >= *distance_) {
+    phase_ = MotionPhase::Idle;
+    marks_.end = t_;
+    if (marks_.decel_end < 0) marks_.decel_end = t_;
+  } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
+    // A move too short for the running velocity turns where the ramps meet.
+    begin_decel();
+  } else if (phase_ == MotionPhase::Running || phase_ == MotionPhase::Creeping) {
+    // The step after this one, here, where the state is at hand: the axes peek after
+    // every step, and at a constant level that answer is all a peek would compute.
+    ahead_.valid = false;
+    peeked_ = run_step_after();
+  } else {
+    peeked_ = peek_plain();  // in a ramp: the same, through its plain level changes
+  }
+  return true;
+}
+
+// take_known(), next_unknown() and peek_plain() on 64-byte boundaries: their loops run at
+// a very high rate of instructions per cycle, and where a merge elsewhere in the file moved
+// them, the same code took 5-9 % more user time (Horner's ramps in ramp_cost_bench; README
+// "Figures").
+[[gnu::aligned(64)]] bool StepGenerator::take_known(Step& out) {
+  // The step peek_plain() or run_step_after() found, in this interval (or ahead_'s) and
+  // before any turn: taken without the loop's tests and division.
+  if (ahead_.valid) ahead_.restore(*this);
+  const Tick at = peeked_;
+  peeked_ = kUnpeeked;  // the next step may move
+  acc_ += level_ * (at - t_) - ramp_.phase_per_step;
+  t_ = at;
+  return took_step(out);
+}
+
+[[gnu::aligned(64)]] bool StepGenerator::next_unknown(Step& out) {
   if (scurve_) {
     peeked_ = kUnpeeked;  // the next step may move
     return s_next(out);
   }
   // A peek() that walked plain ramp intervals left where it got to: start from there.
   if (ahead_.valid && peeked_ != kUnpeeked) ahead_.restore(*this);
-  // >= 0: the step, in this interval, before any turn (peek_plain(), run_step_after()).
-  Tick known = peeked_;
   peeked_ = kUnpeeked;  // the next step may move
   for (;;) {
     if (phase_ == MotionPhase::Idle) return false;
@@ -183,56 +222,28 @@ void StepGenerator::end_interval() {
     // The invariants every front end's input must keep (checked in the sanitizer build): a
     // moving level (the next step's time divides by it) and a phase inside one step.
     assert(level_ >= 1 && acc_ >= 0 && acc_ < d);
-    Tick need = known - t_;  // ticks until the accumulator passes d
-    if (known < 0) {
-      const bool ramping =
-          phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
-      // A ramp interval whose whole phase stays below d has no step (the same test as the
-      // ticks the step needs against the interval's end, without the division; level
-      // times an interval's length is of the order of the ramp's ticks, far inside int64).
-      if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
-        // At the step's interval or the ramp's last plain one, solved.
-        if (cursor_.steep() && !walked_ && solve_steep()) continue;
-        acc_ += level_ * (interval_end_ - t_);
-        t_ = interval_end_;
-        end_interval();
-        continue;
-      }
-      need = (d - acc_ + level_ - 1) / level_;
-      if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
-        acc_ += level_ * (decel_tick_ - t_);
-        t_ = decel_tick_;
-        begin_decel();
-        continue;
-      }
+    bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
+    // A ramp interval whose whole phase stays below d has no step (the same test as the
+    // ticks the step needs against the interval's end, without the division; level times
+    // an interval's length is of the order of the ramp's ticks, far inside int64).
+    if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
+      // At the step's interval or the ramp's last plain one, solved.
+      if (cursor_.steep() && !walked_ && solve_steep()) continue;
+      acc_ += level_ * (interval_end_ - t_);
+      t_ = interval_end_;
+      end_interval();
+      continue;
     }
-    known = kUnpeeked;
+    Tick need = (d - acc_ + level_ - 1) / level_;  // ticks until the accumulator passes d
+    if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && t_ + need > decel_tick_) {
+      acc_ += level_ * (decel_tick_ - t_);
+      t_ = decel_tick_;
+      begin_decel();
+      continue;
+    }
     t_ += need;
     acc_ += level_ * need - d;
-    ++steps_done_;
-    switch (phase_) {
-      case MotionPhase::Accelerating: ++marks_.accel_steps; break;
-      case MotionPhase::Running: ++marks_.run_steps; break;
-      case MotionPhase::Decelerating: ++marks_.decel_steps; break;
-      default: ++marks_.creep_steps; break;
-    }
-    out = Step{t_, direction_};
-    if (distance_ && steps_done_ >= *distance_) {
-      phase_ = MotionPhase::Idle;
-      marks_.end = t_;
-      if (marks_.decel_end < 0) marks_.decel_end = t_;
-    } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
-      // A move too short for the running velocity turns where the ramps meet.
-      begin_decel();
-    } else if (phase_ == MotionPhase::Running || phase_ == MotionPhase::Creeping) {
-      // The step after this one, here, where the state is at hand: the axes peek after
-      // every step, and at a constant level that answer is all a peek would compute.
-      ahead_.valid = false;
-      peeked_ = run_step_after();
-    } else {
-      peeked_ = peek_plain();  // in a ramp: the same, through its plain level changes
-    }
-    return true;
+    return took_step(out);
   }
 }
 

@@ -27,7 +27,7 @@ class StepGenerator {
   // exactly there; without one it runs until stop() (jog, find home).
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
-  bool next(Step& out);
+  bool next(Step& out) { return peeked_ >= 0 ? take_known(out) : next_unknown(out); }
   // From now on every ramp interval of a slope steeper than a level per tick walked, none
   // solved, in next() and in the changes of a running motion (the reference in the tests).
   void walk_steep_ramps(bool on) { walked_ = on; }
@@ -102,6 +102,9 @@ class StepGenerator {
   Tick interval_length(Rational z, int64_t k);
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
+  bool take_known(Step& out);
+  bool next_unknown(Step& out);
+  bool took_step(Step& out);
   std::optional<Tick> peek_unknown();
   // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
   // other cases: the ramp's top, or the level a ramp down ends or holds at.
