@@ -318,10 +318,7 @@ Tick StepGenerator::run_step_after() const {
   } while (phase < left);
   // next() goes on from there.
   const Tick t = end - len;
-  const int64_t passed = (level - level_) * dir;
-  IntervalCursor cursor = cursor_;
-  cursor.advance(passed, rem);
-  ahead_ = Ahead{true, t, d - left, level, interval_index_ + passed, end, cursor};
+  ahead_ = Ahead{true, t, d - left, level, (level - level_) * dir, end, rem};
   return t + (left + level - 1) / level;
 }
 
@@ -329,10 +326,7 @@ Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
   // peek_plain() for a step many levels on: the interval that holds it, solved.
   RampWalk w{t_, interval_end_, level_, ramp_.phase_per_step - acc_, 0, cursor_.remainder()};
   if (!walk_to_step(w, cursor_.grid(), dir, plain)) return kUnpeeked;
-  IntervalCursor cursor = cursor_;
-  cursor.advance(w.passed, w.rem);
-  ahead_ = Ahead{true,  w.t,   ramp_.phase_per_step - w.left, w.level, interval_index_ + w.passed,
-                 w.end, cursor};
+  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
   return w.t + (w.left + w.level - 1) / w.level;
 }
 
@@ -363,7 +357,8 @@ bool StepGenerator::solve_steep(Tick until) {
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {
   g.t_ = t, g.acc_ = acc, g.level_ = level;
-  g.interval_index_ = index, g.interval_end_ = end, g.cursor_ = cursor;
+  g.interval_index_ += passed, g.interval_end_ = end;
+  g.cursor_.advance(passed, rem);
 }
 
 void StepGenerator::advance_to(Tick at) {

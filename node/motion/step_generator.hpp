@@ -150,12 +150,13 @@ class StepGenerator {
   int64_t interval_index_ = 0;
   IntervalCursor cursor_;  // the interval lengths, walked without divisions
   // Where peek() got to through plain level changes, for next() to go on from.
+  // The cursor's grid stays as it is on the way: only its place (passed, rem) moves.
   struct Ahead {
     bool valid = false;
     Tick t = 0;
-    int64_t acc = 0, level = 0, index = 0;
+    int64_t acc = 0, level = 0, passed = 0;
     Tick end = 0;
-    IntervalCursor cursor;
+    int64_t rem = 0;
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
