@@ -303,10 +303,8 @@ Tick StepGenerator::run_step_after() const {
   if (cursor_.steep() || most < static_cast<double>(left - phase)) return peek_far(dir, plain);
   // The walk with the cursor's additions (ramp_intervals.hpp) in registers: the interval
   // lengths are q or q + 1 (q >= 1 here), the phase of each its level times its length.
-  const int64_t last = level + dir * plain;  // the ramp's last plain level
   int64_t rem = cursor_.remainder();
-  do {
-    if (level == last) return kUnpeeked;
+  const auto pass = [&] {
     left -= phase;
     level += dir;
     rem += g.rho;
@@ -315,7 +313,21 @@ Tick StepGenerator::run_step_after() const {
     len = g.q + (carry ? 1 : 0);
     end += len;
     phase = level * len;
-  } while (phase < left);
+  };
+  // Every interval is at least q long: where the next n levels (the room's, at most
+  // 2·kWalked) add at least the phase to come, the walk ends within the room, unchecked
+  // (the products stay below 4·most, far inside int64).
+  const int64_t n = std::min(plain, 2 * kWalked);
+  if (g.q * (n * level + dir * (n * (n + 1) / 2)) >= left - phase) {
+    do pass();
+    while (phase < left);
+  } else {
+    const int64_t last = level + dir * plain;  // the ramp's last plain level
+    do {
+      if (level == last) return kUnpeeked;
+      pass();
+    } while (phase < left);
+  }
   // next() goes on from there.
   const Tick t = end - len;
   ahead_ = Ahead{true, t, d - left, level, (level - level_) * dir, end, rem};
