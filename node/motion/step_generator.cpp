@@ -198,7 +198,10 @@ void StepGenerator::end_interval() {
 // "Figures").
 [[gnu::aligned(64)]] bool StepGenerator::take_known(Step& out) {
   // The step peek_plain() or run_step_after() found, in this interval (or ahead_'s) and
-  // before any turn: taken without the loop's tests and division.
+  // before any turn: taken without the loop's tests and division. (An S-curve's, which
+  // s_next() peeked: its own.)
+  if (scurve_) [[unlikely]]
+    return s_take_known(out);
   if (ahead_.valid) ahead_.restore(*this);
   const Tick at = peeked_;
   peeked_ = kUnpeeked;  // the next step may move

@@ -122,6 +122,7 @@ class StepGenerator {
   // The jerk-limited profile (ramp.s_curve): step_generator_s_curve.cpp.
   void s_start(const RampSpec& ramp, Tick start, std::optional<int64_t> distance);
   bool s_next(Step& out);
+  bool s_take_known(Step& out);
   void s_follow();
   void s_track_peak();
   int64_t s_level() const;

@@ -103,6 +103,11 @@ int64_t StepGenerator::s_level() const {
   return level_of(v * lph);
 }
 
+bool StepGenerator::s_take_known(Step& out) {
+  peeked_ = kUnpeeked;  // the next step may move
+  return s_next(out);
+}
+
 bool StepGenerator::s_next(Step& out) {
   if (phase_ == MotionPhase::Idle) return false;
   SCurve& s = *s_.p;
@@ -129,6 +134,9 @@ bool StepGenerator::s_next(Step& out) {
   } else if (!s_at_target_) {
     s_track_peak();
   }
+  // The step after this one, here (the axes peek after every step): peek() answers it
+  // inline; next() takes it through take_known(), which hands it back here.
+  if (phase_ != MotionPhase::Idle) peeked_ = s.peek().value_or(kNoStep);
   return true;
 }
 
