@@ -33,7 +33,7 @@ class StepGenerator {
   void walk_steep_ramps(bool on) { walked_ = on; }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
-    if (peeked_ >= 0) return peeked_;  // known (next() finds the one after a run's step)
+    if (peeked_ >= 0) return peeked_;  // known (next() finds the one after each step)
     return peek_unknown();
   }
 
@@ -139,8 +139,9 @@ class StepGenerator {
   // peek()'s answer until the motion changes (a plain tick: the hot path copies the
   // generator for every step): a step time, or one of these. next() sets it after each
   // step; every other change of the motion resets it. A time here is the step next()
-  // takes in the current interval (or ahead_'s), without the division; the answer a copy
-  // of the generator found is copied_ (kCopied here).
+  // takes in the current interval (or ahead_'s), without the division (an S-curve's: the
+  // one its own peek found); the answer a copy of the generator found is copied_ (kCopied
+  // here).
   static constexpr Tick kUnpeeked = -2, kNoStep = -1, kCopied = -3;
   static constexpr Tick kNever = INT64_MAX;  // solve_steep(): no tick to stop at
   Tick peeked_ = kUnpeeked;
