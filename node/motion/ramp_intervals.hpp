@@ -27,11 +27,8 @@ class IntervalCursor {
   bool at(Rational z, int64_t k) const { return k == k_ && z.num == z_.num && z.den == z_.den; }
   // The length of the interval after the last one given (same Z).
   Tick next_length() {
-    rem_ += rho_;
-    const bool carry = rem_ >= z_.den;
-    rem_ -= carry ? z_.den : 0;
     ++k_;
-    return q_ + (carry ? 1 : 0);
+    return grid().next_length(rem_);
   }
   // After a length of 0 (a slope steeper than one level per tick: Z < 1), how many of the
   // next intervals are 0 long too (their levels come at the same tick): the remainder may

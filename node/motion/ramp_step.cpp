@@ -373,10 +373,7 @@ bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) 
     w.t = w.end;
     w.level += dir;
     ++w.passed;
-    w.rem += g.rho;
-    const bool carry = w.rem >= g.den;
-    w.rem -= carry ? g.den : 0;
-    w.end = w.t + g.q + (carry ? 1 : 0);  // 0 long at q = 0: its level adds no phase
+    w.end = w.t + g.next_length(w.rem);  // 0 long at q = 0: its level adds no phase
   }
   return true;
 }

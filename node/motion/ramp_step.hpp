@@ -24,6 +24,14 @@ namespace stepnode::motion {
 // A ramp's interval lengths: q ticks, q + 1 where the remainder carries (IntervalCursor).
 struct IntervalGrid {
   int64_t q = 0, rho = 0, den = 1;
+  // The next interval's length given `rem`, the remainder after the one before (moved on
+  // to the remainder after it): q, or q + 1 where it carries past den.
+  Tick next_length(int64_t& rem) const {
+    rem += rho;
+    const bool carry = rem >= den;
+    rem -= carry ? den : 0;
+    return q + (carry ? 1 : 0);
+  }
 };
 
 // Where the walk to the next step stands: at tick t, in an interval at `level` that ends at

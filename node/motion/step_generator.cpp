@@ -310,10 +310,7 @@ Tick StepGenerator::run_step_after() const {
   const auto pass = [&] {
     left -= phase;
     level += dir;
-    rem += g.rho;
-    const bool carry = rem >= g.den;
-    rem -= carry ? g.den : 0;
-    len = g.q + (carry ? 1 : 0);
+    len = g.next_length(rem);
     end += len;
     phase = level * len;
   };
