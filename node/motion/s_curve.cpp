@@ -105,6 +105,8 @@ void SCurve::replan(Tick at, std::optional<int64_t> distance, double velocity,
                     std::optional<double> decel) {
   peeked_.reset();
   local_[cur_].seg = -1;  // the segments change: the next step by the full search
+  even_.seg = -1;
+  even_.ready = false;
   const State now = state_at(at);
   const double v0 = static_cast<double>(now.v) / kV, a0 = static_cast<double>(now.a) / kA;
   count_ = seg_ = 0;

@@ -9,7 +9,9 @@
 // with the exact integers. From one step to the next the cubic is kept moved to the last
 // step's tick (s_curve_local.cpp), so a step costs a short Newton solve and two exact
 // evaluations of a cubic at a small offset; the full search takes over where that does
-// not decide (a segment's end, a replan, an estimate more than a tick off). Position and velocity
+// not decide (a segment's end, a replan, an estimate more than a tick off). At a constant
+// velocity (a cruise, a held velocity, a creep) a step is a Bresenham line's instead
+// (s_curve_even.cpp): two additions and a compare. Position and velocity
 // are continuous; at a segment end the acceleration may jump by less than one tick of jerk (the
 // phases are whole ticks long). A move to a target is planned backwards from the target (its ramp
 // down ends there with v = 0 exactly), forwards from where the motion is; a cruise joins the two.
@@ -40,7 +42,12 @@ class SCurve {
   // From standstill at `start`: to `distance` steps (> 0), or to the velocity and on.
   void start(const JerkLimits& limits, Tick start, std::optional<int64_t> distance);
   // The next step's tick after the last one; nullopt when the motion has ended (end()).
-  std::optional<Tick> next_step();
+  std::optional<Tick> next_step() { return even_.ready ? take_even() : next_searched(); }
+  // The peeked step lies on a constant velocity the last step already had (a cruise's
+  // second step on): taking it (take_even(), the step's tick) changes nothing but the step
+  // count and time, and peeks the one after it.
+  bool next_is_steady() const { return even_.ready && even_.entered; }
+  Tick take_even();
   std::optional<Tick> peek() {
     if (!peeked_) peeked_ = search().value_or(-1);
     return *peeked_ < 0 ? std::nullopt : peeked_;
@@ -48,6 +55,7 @@ class SCurve {
   // For tests: every step by the full search (the reference the quick one must equal).
   void use_full_search() { full_search_only_ = true; }
   int64_t quick_steps() const { return quick_steps_; }  // steps the quick search found
+  int64_t even_steps() const { return even_steps_; }    // of those, at a constant velocity
   // From `at`: ramp to velocity 0 and end (deceleration `decel`, or the limits' one).
   void stop(Tick at, std::optional<double> decel = std::nullopt);
   // From `at`: a new cruise velocity (a move keeps its target), or a new target
@@ -119,6 +127,23 @@ class SCurve {
   };
   std::optional<Tick> quick();
   static int try_step(const Local& l, const Segment& g, Tick d, Local& n);
+  // A segment of constant velocity (c2 = c3 = 0: a cruise, a hold, a creep), kS = q c1 + r:
+  // each step falls q or q + 1 ticks after the one before, as the overshoot past the step
+  // (kS - gap, 0 <= it < c1) moves by -r modulo c1, a Bresenham line (s_curve_even.cpp).
+  // No Newton, no cubic: most of a move's steps are its cruise's. While it runs, Local is
+  // not kept up: the current one has the slope (c1) and no segment (seg -1), so once a step
+  // falls beyond the segment the full search finds it.
+  struct Even {
+    int seg = -1;          // the segment q and r are for; -1: none
+    bool ready = false;    // peeked_ is this path's step (next): take_even() takes it
+    bool entered = false;  // local_[cur_] is this path's (c1, seg -1)
+    Tick q = 0;
+    Tick next = 0, bound = 0;          // the peeked step; the segment's last tick
+    __int128 r = 0, c1 = 0, over = 0;  // over: the peeked step's overshoot, 0 <= over < c1
+  };
+  void seat_even(int seg, const Segment& g);
+  std::optional<Tick> even_step(const Local& l, const Segment& g);
+  std::optional<Tick> next_searched();
   void seat_local(Tick prev);
 
   JerkLimits limits_;
@@ -138,6 +163,8 @@ class SCurve {
   bool pending_quick_ = false;    // peek()'s step is local_[cur_ ^ 1]'s
   bool full_search_only_ = false;
   int64_t quick_steps_ = 0;
+  Even even_;
+  int64_t even_steps_ = 0;
 };
 
 }  // namespace stepnode::motion

@@ -49,6 +49,7 @@ std::optional<Tick> SCurve::quick() {
   const Local& l = local_[cur_];
   if (l.seg < 0 || ended_ || (distance_ && steps_ >= *distance_)) return std::nullopt;
   const Segment& g = segs_[l.seg];
+  if (l.seg == even_.seg) return even_step(l, g);  // a constant velocity (s_curve_even.cpp)
   const Tick room = std::min(g.len - l.tau, kLongest);
   if (l.left < l.gap) return std::nullopt;  // the segment ends below: the full search skips it
   // Newton from where the last two intervals point (within a fraction of a tick while the
@@ -99,6 +100,7 @@ void SCurve::seat_local(Tick prev) {
   l.w = static_cast<double>(std::max<Tick>(1, last_ - prev));
   l.dw = 0;
   l.seg = l.gap > 0 ? seg_ : -1;
+  if (g.c3 == 0 && g.c2 == 0 && l.seg >= 0) seat_even(l.seg, g);  // the cruise's steps
 }
 
 }  // namespace stepnode::motion

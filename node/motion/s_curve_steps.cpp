@@ -63,6 +63,7 @@ std::optional<Tick> SCurve::compute(int& k) const {
 std::optional<Tick> SCurve::search() {
   // The quick search where it decides; the full one otherwise (a step in another segment,
   // the first after a start or replan, an estimate that missed).
+  even_.ready = false;
   if (!full_search_only_) {
     if (const std::optional<Tick> t = quick()) return t;
   }
@@ -71,8 +72,9 @@ std::optional<Tick> SCurve::search() {
   return compute(peeked_seg_);
 }
 
-std::optional<Tick> SCurve::next_step() {
+std::optional<Tick> SCurve::next_searched() {
   const std::optional<Tick> t = peek();
+  if (even_.ready) return take_even();  // the search found it at a constant velocity
   peeked_.reset();
   if (!t) {
     ended_ = true;

@@ -123,8 +123,16 @@ class StepGenerator {
   void s_start(const RampSpec& ramp, Tick start, std::optional<int64_t> distance);
   bool s_next(Step& out);
   bool s_take_known(Step& out);
+  bool s_take_steady(Step& out);
+  void s_end_at_last_step();
   void s_follow();
-  void s_track_peak();
+  // The peak of the levels at every step, without the level of each: level_of(), the
+  // conversions and the scale all rise with the slope, so a slope up to the highest one
+  // counted so far cannot raise the peak (not holding the target: the level is the slope's).
+  void s_track_peak() {
+    if (const __int128 slope = s_.p->slope(); slope > s_peak_slope_) s_raise_peak(slope);
+  }
+  void s_raise_peak(__int128 slope);
   int64_t s_level() const;
   void leave_s_curve(Tick at);
   JerkLimits jerk_limits(const RampSpec& ramp) const;

@@ -83,12 +83,7 @@ void StepGenerator::s_follow() {
   }
 }
 
-void StepGenerator::s_track_peak() {
-  // The peak of the levels at every step, without the level of each: level_of(), the
-  // conversions and the scale all rise with the slope, so a slope up to the highest one
-  // counted so far cannot raise the peak (not holding the target: the level is the slope's).
-  const __int128 slope = s_.p->slope();
-  if (slope <= s_peak_slope_) return;
+void StepGenerator::s_raise_peak(__int128 slope) {
   s_peak_slope_ = slope;
   marks_.peak_level = std::max(marks_.peak_level, s_level());
 }
@@ -104,8 +99,32 @@ int64_t StepGenerator::s_level() const {
 }
 
 bool StepGenerator::s_take_known(Step& out) {
+  if (s_.p->next_is_steady()) return s_take_steady(out);
   peeked_ = kUnpeeked;  // the next step may move
   return s_next(out);
+}
+
+bool StepGenerator::s_take_steady(Step& out) {
+  // A cruise's step at the velocity of the step before: phase, level and peak stay.
+  SCurve& s = *s_.p;
+  t_ = s.take_even();
+  ++steps_done_;
+  out = Step{t_, direction_};
+  if (s.ended()) [[unlikely]] {
+    s_end_at_last_step();
+  } else {
+    peeked_ = s.peek().value_or(kNoStep);  // take_even() peeked it (or the search does)
+  }
+  return true;
+}
+
+void StepGenerator::s_end_at_last_step() {
+  s_follow();
+  level_ = s_level();  // kept while idle (a start without steps leaves it)
+  s_level_lazy_ = false;
+  phase_ = MotionPhase::Idle;
+  marks_.end = t_;
+  peeked_ = kUnpeeked;
 }
 
 bool StepGenerator::s_next(Step& out) {
@@ -124,11 +143,7 @@ bool StepGenerator::s_next(Step& out) {
   ++steps_done_;
   out = Step{t_, direction_};
   if (s.ended()) {
-    s_follow();
-    level_ = s_level();  // kept while idle (a start without steps leaves it)
-    s_level_lazy_ = false;
-    phase_ = MotionPhase::Idle;
-    marks_.end = t_;
+    s_end_at_last_step();
   } else if (!s.last_step_quick()) {
     s_follow();
   } else if (!s_at_target_) {

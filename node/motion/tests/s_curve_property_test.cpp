@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "node/motion/s_curve.hpp"
@@ -65,7 +67,7 @@ void random_change(std::mt19937_64& rng, Pair& p, Tick last, const JerkLimits& l
 
 TEST(SCurveProperty, QuickSearchEqualsTheFullSearchOnEveryStep) {
   std::mt19937_64 rng(20240613);
-  int64_t steps = 0, quick = 0;
+  int64_t steps = 0, quick = 0, even = 0;
   for (int move = 0; move < 300; ++move) {
     const JerkLimits l = random_limits(rng);
     const bool to_target = rng() % 3 != 0;
@@ -93,10 +95,53 @@ TEST(SCurveProperty, QuickSearchEqualsTheFullSearchOnEveryStep) {
     }
     EXPECT_EQ(p.quick.end(), p.full.end()) << "move " << move;
     quick += p.quick.quick_steps();
+    even += p.quick.even_steps();
   }
   // The comparison means something only if the quick search found most steps.
   EXPECT_GT(steps, 300'000);
   EXPECT_GT(quick, steps * 9 / 10) << quick << " of " << steps;
+  // ... and its constant-velocity path (cruises, holds, creeps) a good part of them.
+  EXPECT_GT(even, steps / 4) << even << " of " << steps;
+  std::printf("%lld steps, %lld by the quick search, %lld of those at a constant velocity\n",
+              static_cast<long long>(steps), static_cast<long long>(quick),
+              static_cast<long long>(even));
+}
+
+// The constant-velocity path (s_curve_even.cpp) across the whole range of velocities: from
+// steps 40 minutes apart to nearly a step per tick, where its q and r are at their ends,
+// held open or cruising to a target, stopped or changed in the middle of a cruise (its
+// step then re-found by the searches): every step on the full search's tick.
+TEST(SCurveProperty, ConstantVelocityStepsEqualTheFullSearch) {
+  std::mt19937_64 rng(20261205);
+  int64_t steps = 0, even = 0;
+  for (int move = 0; move < 240; ++move) {
+    JerkLimits l;
+    const double lo = std::log(4e-4), hi = std::log(4.9e6);  // up to 0.997 steps per tick
+    l.velocity = std::exp(std::uniform_real_distribution<double>(lo, hi)(rng));
+    l.acceleration = l.deceleration = std::max(1.0, l.velocity) * 40;  // a short ramp
+    const uint32_t j = static_cast<uint32_t>(std::min(4e9, l.acceleration * 200));
+    l.begin_accel_jerk = l.end_accel_jerk = l.begin_decel_jerk = l.end_decel_jerk = j;
+    const std::optional<int64_t> distance =
+        move % 2 ? std::optional<int64_t>(2000 + static_cast<int64_t>(rng() % 4000)) : std::nullopt;
+    Pair p;
+    p.full.use_full_search();
+    p.quick.start(l, 0, distance);
+    p.full.start(l, 0, distance);
+    const int64_t change_at = move % 3 == 0 ? 1000 + static_cast<int64_t>(rng() % 1000) : -1;
+    Tick last = 0;
+    for (int64_t n = 0; n < 3000; ++n) {
+      if (n == change_at) random_change(rng, p, last, l);
+      const std::optional<Tick> a = p.quick.next_step(), b = p.full.next_step();
+      ASSERT_EQ(a, b) << "move " << move << " v " << l.velocity << " step " << n + 1;
+      ASSERT_EQ(p.quick.velocity(), p.full.velocity()) << "move " << move << " step " << n + 1;
+      if (!a) break;
+      last = *a;
+      ++steps;
+    }
+    even += p.quick.even_steps();
+  }
+  EXPECT_GT(steps, 500'000);
+  EXPECT_GT(even, steps * 3 / 4) << even << " of " << steps;
 }
 
 }  // namespace
