@@ -38,6 +38,7 @@ int64_t first_reaching(int64_t q, int64_t level, int64_t dir, int64_t most, int6
 bool walk_runs(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, int64_t phase) {
   const int64_t q = g.q;
   for (;;) {
+    if (w.passed >= room) return false;  // w at the room's last interval
     w.left -= phase;
     w.t = w.end;
     // The q-long intervals before the next carry (rem + j·rho < den), no further than the
@@ -59,13 +60,18 @@ bool walk_runs(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, in
         w.rem += n * g.rho;
         return true;
       }
-      w.left -= static_cast<int64_t>(all);
-      w.t += q * run;
+      // The room ends in the run: w at its last interval, which holds no step.
+      const int64_t to = w.passed + run >= room ? run - 1 : run;
+      w.left -= static_cast<int64_t>(to == run ? all : run_phase(q, w.level, dir, to));
+      w.t += q * to;
       w.level += dir * run;
       w.passed += run;
       w.rem += run * g.rho;
+      if (to < run) {
+        w.end = w.t + q;
+        return false;
+      }
     }
-    if (w.passed >= room) return false;
     // The carry's interval, q + 1 ticks.
     w.level += dir;
     ++w.passed;
@@ -350,16 +356,15 @@ bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room)
     const int64_t through = (rem + m * rho) / den;  // C(m)
     const Tick len = q + through - carries;
     const int64_t after = before + (level + dir * m) * len;
-    if (after >= left) {
+    if (after >= left || m >= room) {  // the step's interval, or the room's last (none)
       w.t += w.end - w.t + q * (m - 1) + carries;
       w.end = w.t + len;
       w.level = level + dir * m;
       w.left = left - before;
       w.passed += m;
       w.rem = rem + m * rho - through * den;
-      return true;
+      return after >= left;
     }
-    if (m >= room) return false;
     before = after;
     carries = through;
     ++m;

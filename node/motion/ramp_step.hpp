@@ -44,11 +44,11 @@ struct RampWalk {
 
 // Moves w into the interval in which the step falls (level * (end - t) >= left), at most
 // `room` level changes on (where the ramp has its top or its end), w's own interval not
-// holding it (the caller has looked). False if the step lies beyond that: w anywhere, or
-// with intervals of 0 ticks (q = 0: several levels at one tick, a slope steeper than one
-// level per tick) at the room's last interval, where the generator's own loop would be
-// (ramp_step.cpp: the walk from tick to tick solved as the ramp with the roles of ticks
-// and levels swapped). Levels in a ramp are >= 1.
+// holding it (the caller has looked). False if the step lies beyond that: w at the room's
+// last interval, where the generator's own loop would be (walk_levels' answer; with
+// intervals of 0 ticks, q = 0, several levels at one tick, a slope steeper than one level
+// per tick: where the generator passes them, ramp_step.cpp: the walk from tick to tick
+// solved as the ramp with the roles of ticks and levels swapped). Levels in a ramp are >= 1.
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);
 
 // For q = 0 (Z < 1) only: moves w where the generator's advance_to(until) stops passing

@@ -230,8 +230,10 @@ void StepGenerator::end_interval() {
     // ticks the step needs against the interval's end, without the division; level times
     // an interval's length is of the order of the ramp's ticks, far inside int64).
     if (ramping && level_ * (interval_end_ - t_) < d - acc_) {
-      // At the step's interval or the ramp's last plain one, solved.
-      if (cursor_.steep() && !walked_ && solve_steep()) continue;
+      // At the step's interval or the ramp's last plain one, solved (levels at one tick,
+      // or many before the step: the end of a ramp down on a fine grid, where peek() finds
+      // the step beyond its room and a copy of the generator comes here).
+      if (!walked_ && solve_ramp()) continue;
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();
@@ -348,15 +350,17 @@ int64_t StepGenerator::plain_levels() const {
          1;
 }
 
-bool StepGenerator::solve_steep(Tick until) {
-  // Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2): the walk to the step or the
-  // ramp's last plain level (and for advance_to(), to the tick `until` if that comes
-  // first), solved (ramp_step.hpp), not one loop turn per tick.
+bool StepGenerator::solve_ramp(Tick until) {
+  // The walk to the step or the ramp's last plain level, solved (ramp_step.hpp), not one
+  // loop turn per interval: at Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2; for
+  // advance_to(), to the tick `until` if that comes first), or with kWalked levels or more
+  // to go (a fine grid near rest: thousands of levels in a step; fewer are faster walked).
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
   const int64_t room = plain_levels();
-  if (!cursor_.steep() || room <= 0) return false;
+  const bool steep = cursor_.steep();
+  if (room <= 0 || (!steep && (until != kNever || room < kWalked))) return false;
   const int64_t d = ramp_.phase_per_step;
   RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
   if (until == kNever) walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
@@ -384,7 +388,7 @@ void StepGenerator::advance_to(Tick at) {
     if (ramping && interval_end_ <= limit) {
       // Levels at one tick (Z < 1): the ticks up to `at` (or the step, or the ramp's last
       // plain level) solved as next() solves them, not passed one at a time.
-      if (cursor_.steep() && !walked_ && solve_steep(at)) continue;
+      if (cursor_.steep() && !walked_ && solve_ramp(at)) continue;
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();

@@ -28,9 +28,10 @@ class StepGenerator {
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out) { return peeked_ >= 0 ? take_known(out) : next_unknown(out); }
-  // From now on every ramp interval of a slope steeper than a level per tick walked, none
-  // solved, in next() and in the changes of a running motion (the reference in the tests).
-  void walk_steep_ramps(bool on) { walked_ = on; }
+  // From now on every ramp interval walked one loop turn at a time, none solved (levels at
+  // one tick, or many levels before a step), in next() and in the changes of a running
+  // motion (the reference in the tests; peek() still solves what it finds).
+  void walk_ramps(bool on) { walked_ = on; }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
     if (peeked_ >= 0) return peeked_;  // known (next() finds the one after each step)
@@ -109,7 +110,7 @@ class StepGenerator {
   // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
   // other cases: the ramp's top, or the level a ramp down ends or holds at.
   int64_t plain_levels() const;
-  bool solve_steep(Tick until = kNever);
+  bool solve_ramp(Tick until = kNever);
   Tick peek_plain();
   Tick run_step_after() const;
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
@@ -151,7 +152,7 @@ class StepGenerator {
   // one its own peek found); the answer a copy of the generator found is copied_ (kCopied
   // here).
   static constexpr Tick kUnpeeked = -2, kNoStep = -1, kCopied = -3;
-  static constexpr Tick kNever = INT64_MAX;  // solve_steep(): no tick to stop at
+  static constexpr Tick kNever = INT64_MAX;  // solve_ramp(): no tick to stop at
   Tick peeked_ = kUnpeeked;
   Tick copied_ = kNoStep;
   int64_t acc_ = 0;  // phase accumulator, 0 <= acc_ < phase_per_step
@@ -170,7 +171,7 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
-  bool walked_ = false;           // walk_steep_ramps(): every ramp interval walked
+  bool walked_ = false;           // walk_ramps(): every ramp interval walked
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_

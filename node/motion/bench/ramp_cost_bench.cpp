@@ -72,7 +72,7 @@ enum class Mode { Whole, Ramps, StopEarly, StopEarlyWalked };
 
 [[gnu::noinline]] Totals run_moves(const Kind& k, int moves, Mode mode) {
   StepGenerator g;
-  g.walk_steep_ramps(mode == Mode::StopEarlyWalked);
+  g.walk_ramps(mode == Mode::StopEarlyWalked);
   const bool ramps_only = mode == Mode::Ramps;
   Totals out;
   Tick t = 0;

@@ -3,7 +3,7 @@
 // does (and that walk against the level-by-level one where levels are few), every field
 // compared, on the step and at the room's end; and the generator's steps on random steep
 // moves changed mid-way, at a step or between two, against its own step loop with no
-// solve (walk_steep_ramps()).
+// solve (walk_ramps()).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -237,7 +237,7 @@ enum class Taking { Peeked, Next, Walked };
 std::vector<Tick> run(const RampSpec& r, int64_t distance, Taking taking, std::mt19937_64 rng,
                       int changes, Rational quick) {
   StepGenerator g;
-  g.walk_steep_ramps(taking == Taking::Walked);
+  g.walk_ramps(taking == Taking::Walked);
   g.start(r, 0, 1, distance > 0 ? std::optional<int64_t>(distance) : std::nullopt);
   std::vector<Tick> out;
   Step s;

@@ -20,6 +20,9 @@ int64_t pick(std::mt19937_64& rng, int64_t lo, int64_t hi) {
 
 IntervalGrid grid_of(int64_t num, int64_t den) { return IntervalGrid{num / den, num % den, den}; }
 
+// Walks that ended at the room's last interval, 5 or more levels on (the step beyond it).
+int64_t beyond_the_room = 0;
+
 // The level changes the walk made to reach its step (0 where it did not, or not asked).
 int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t top_level,
                          int64_t top_left) {
@@ -41,14 +44,16 @@ int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t to
   const bool b = walk_to_step(solved, g, dir, room);
   EXPECT_EQ(a, b) << "q " << g.q << " rho " << g.rho << " den " << g.den << " L " << start.level
                   << " left " << start.left << " dir " << dir;
-  if (!a || !b) return 0;
+  if (a != b) return 0;
+  // Found or not (then at the room's last interval, where the generator's loop goes on).
   EXPECT_EQ(walked.t, solved.t);
   EXPECT_EQ(walked.end, solved.end);
   EXPECT_EQ(walked.level, solved.level);
   EXPECT_EQ(walked.left, solved.left);
   EXPECT_EQ(walked.passed, solved.passed);
   EXPECT_EQ(walked.rem, solved.rem);
-  return walked.passed;
+  if (!a && walked.passed >= 5) ++beyond_the_room;
+  return a ? walked.passed : 0;
 }
 
 // Walks `cases` random starts on grids from `make`; most of them must span many levels.
@@ -57,12 +62,14 @@ void expect_same_walks(uint64_t seed, int cases, int64_t top_level, int64_t top_
                        MakeGrid make) {
   std::mt19937_64 rng(seed);
   int spanning = 0;
+  beyond_the_room = 0;
   for (int i = 0; i < cases; ++i) {
     const IntervalGrid g = make(rng);
     if (expect_same_walk(rng, g, top_level, top_left) >= 5) ++spanning;
     if (::testing::Test::HasFailure()) return;
   }
   EXPECT_GT(spanning, cases / 20);  // the cases the solve is for were tried
+  EXPECT_GT(beyond_the_room, cases / 100);
 }
 
 TEST(RampWalk, EveryAnswerIsTheLevelWalksOnProfileGrids) {
@@ -102,10 +109,15 @@ TEST(RampWalk, IntervalsOfNoTicksAreSolvedTickByTick) {
   EXPECT_EQ(w.left, 21);
 }
 
-// A move's steps, peeking before each (as the axes do) or not.
-std::vector<Tick> run(const RampSpec& r, int64_t distance, bool peek, std::mt19937_64 rng,
+// A move's steps: peeking before each (as the axes do), next() alone, or next() alone with
+// every ramp interval walked (walk_ramps(): the generator's loop, nothing solved).
+enum class Taking { Peeked, Next, Walked };
+
+std::vector<Tick> run(const RampSpec& r, int64_t distance, Taking taking, std::mt19937_64 rng,
                       int changes) {
+  const bool peek = taking == Taking::Peeked;
   StepGenerator g;
+  g.walk_ramps(taking == Taking::Walked);
   g.start(r, 0, 1, distance > 0 ? std::optional<int64_t>(distance) : std::nullopt);
   std::vector<Tick> out;
   Step s;
@@ -130,21 +142,39 @@ std::vector<Tick> run(const RampSpec& r, int64_t distance, bool peek, std::mt199
   return out;
 }
 
-TEST(RampWalk, PeekedStepsAreTheStepLoopsOnRandomMoves) {
-  std::mt19937_64 rng(2026);
-  for (int i = 0; i < 300; ++i) {
-    const int64_t accel = pick(rng, 1'000, 2'000'000), decel = pick(rng, 1'000, 2'000'000);
-    const int64_t velocity = pick(rng, 100, 50'000);
+// Random moves with up to three changes on grids of `accels` and `velocities`: every step
+// peeked, taken by next() alone and walked falls on the same tick.
+void expect_same_moves(uint64_t seed, int moves, int64_t accel_lo, int64_t accel_hi, int64_t v_lo,
+                       int64_t v_hi, int64_t distance_hi) {
+  std::mt19937_64 rng(seed);
+  int64_t steps = 0;
+  for (int i = 0; i < moves; ++i) {
+    const int64_t accel = pick(rng, accel_lo, accel_hi), decel = pick(rng, accel_lo, accel_hi);
+    const int64_t velocity = pick(rng, v_lo, v_hi);
     const RampSpec r =
         profile_ramp(velocity, accel, decel, profile_levels_per_hz(std::max(accel, decel)));
-    const int64_t distance = rng() % 4 == 0 ? 0 : pick(rng, 1, 30'000);
+    const int64_t distance = rng() % 4 == 0 ? 0 : pick(rng, 1, distance_hi);
     const int changes = static_cast<int>(rng() % 4);
     const std::mt19937_64 script(rng());
-    const std::vector<Tick> peeked = run(r, distance, true, script, changes);
-    const std::vector<Tick> looped = run(r, distance, false, script, changes);
-    ASSERT_EQ(peeked, looped) << "move " << i << ": v " << velocity << " a " << accel << " d "
-                              << decel << " distance " << distance;
+    const std::vector<Tick> walked = run(r, distance, Taking::Walked, script, changes);
+    ASSERT_EQ(run(r, distance, Taking::Peeked, script, changes), walked)
+        << "move " << i << ": v " << velocity << " a " << accel << " d " << decel << " distance "
+        << distance;
+    ASSERT_EQ(run(r, distance, Taking::Next, script, changes), walked) << "move " << i;
+    steps += static_cast<int64_t>(walked.size());
   }
+  EXPECT_GT(steps, moves * 200);
+}
+
+TEST(RampWalk, PeekedStepsAreTheStepLoopsOnRandomMoves) {
+  expect_same_moves(2026, 300, 1'000, 2'000'000, 100, 50'000, 30'000);
+}
+
+TEST(RampWalk, SlowRampsEndingThousandsOfLevelsFromTheirLastStep) {
+  // Slopes of 10 to 5,000 steps/s^2 on their fine grids (64 levels per step/s and finer):
+  // near rest a step spans thousands of levels, and a ramp down's last one lies beyond the
+  // plain levels peek() solves, so next() solves its way there.
+  expect_same_moves(1205, 150, 10, 5'000, 5, 2'000, 3'000);
 }
 
 }  // namespace
