@@ -42,7 +42,7 @@ class SCurve {
   // From standstill at `start`: to `distance` steps (> 0), or to the velocity and on.
   void start(const JerkLimits& limits, Tick start, std::optional<int64_t> distance);
   // The next step's tick after the last one; nullopt when the motion has ended (end()).
-  std::optional<Tick> next_step() { return even_.ready ? take_even() : next_searched(); }
+  std::optional<Tick> next_step();
   // The peeked step lies on a constant velocity the last step already had (a cruise's
   // second step on): taking it (take_even(), the step's tick) changes nothing but the step
   // count and time, and peeks the one after it.
@@ -143,7 +143,6 @@ class SCurve {
   };
   void seat_even(int seg, const Segment& g);
   std::optional<Tick> even_step(const Local& l, const Segment& g);
-  std::optional<Tick> next_searched();
   void seat_local(Tick prev);
 
   JerkLimits limits_;

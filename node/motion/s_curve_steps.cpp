@@ -72,9 +72,9 @@ std::optional<Tick> SCurve::search() {
   return compute(peeked_seg_);
 }
 
-std::optional<Tick> SCurve::next_searched() {
+std::optional<Tick> SCurve::next_step() {
   const std::optional<Tick> t = peek();
-  if (even_.ready) return take_even();  // the search found it at a constant velocity
+  if (even_.ready) return take_even();  // at a constant velocity (s_curve_even.cpp)
   peeked_.reset();
   if (!t) {
     ended_ = true;
