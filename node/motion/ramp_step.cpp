@@ -291,20 +291,45 @@ void park_at_tick(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left,
   w.rem = static_cast<int64_t>(w.rem + j * g.rho - carries * g.den);
 }
 
+// For q >= 1: where the generator's loop parks at tick `until` (>= w.end, before the
+// interval of the step and inside the room): in the interval that holds that tick, past
+// every one that ends by it. Of the intervals after w's, the first m last S(m) =
+// floor((m·(q·den + rho) + rem)/den) ticks, so m = floor(((X + 1)·den - rem - 1)/(q·den +
+// rho)) of them end by X = until - w.end, and the (m + 1)-th holds it; those m add the
+// phase W(m) of walk_to_step. In 128 bits: only a stop or a change between two steps
+// comes here.
+void park_in_interval(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left, Tick until) {
+  using W = __int128;
+  const W q = g.q, rho = g.rho, den = g.den, rem = w.rem, level = w.level;
+  const W m = ((until - w.end + W{1}) * den - rem - 1) / (q * den + rho);
+  const W carries = (rem + m * rho) / den, j = m + 1, through = (rem + j * rho) / den;
+  const W phase = q * (m * level + dir * (m * (m + 1) / 2)) + carries * level +
+                  dir * carry_positions<W>(carries, rho, den, rem);  // W(m)
+  w.t = w.end + static_cast<Tick>(q * m + carries);
+  w.end = w.t + static_cast<Tick>(q + through - carries);
+  w.level += dir * static_cast<int64_t>(j);
+  w.left = left - static_cast<int64_t>(phase);
+  w.passed += static_cast<int64_t>(j);
+  w.rem = static_cast<int64_t>(rem + j * rho - through * den);
+}
+
 }  // namespace
 
-void walk_steep_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
+void walk_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
   RampWalk to_step = w;
   walk_to_step(to_step, g, dir, room);  // walk_steep, inlined in walk_to_step alone
-  // The step's interval, or the room's last, begun before `until` (or the room's last, 0
-  // long, at it): the generator's loop passes every interval before it (none holds the
-  // step, each ends by `until`) and stops there.
-  if (to_step.t < until || (to_step.t == until && to_step.end == until)) {
+  // The step's interval, or the room's last, begun by `until` (at q = 0: before it, or the
+  // room's last, 0 long, at it): the generator's loop passes every interval before it
+  // (none holds the step, each ends by `until`) and stops there.
+  const bool reached = g.q > 0 ? to_step.t <= until
+                               : to_step.t < until || (to_step.t == until && to_step.end == until);
+  if (reached) {
     w = to_step;
     return;
   }
-  // Else it stops at `until`, the start of tick m after w's interval, inside the room.
   const int64_t left = w.left - w.level * (w.end - w.t);
+  if (g.q > 0) return park_in_interval(w, g, dir, left, until);
+  // At q = 0 the loop stops at `until`, the start of tick m after w's interval.
   const int64_t m = until - w.end + 1;
   if (steep_fits_64(w, g, room, m)) park_at_tick<int64_t>(w, g, dir, left, m);
   else park_at_tick<__int128>(w, g, dir, left, m);

@@ -51,11 +51,11 @@ struct RampWalk {
 // solved as the ramp with the roles of ticks and levels swapped). Levels in a ramp are >= 1.
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);
 
-// For q = 0 (Z < 1) only: moves w where the generator's advance_to(until) stops passing
-// intervals: the first that holds the step or tick `until` (>= w.end, > w.t; w's own interval
-// not holding the step), or the room's last (`room` level changes on, > 0), where the
-// generator's own loop goes on.
-void walk_steep_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until);
+// Moves w where the generator's advance_to(until) stops passing intervals: the first that
+// holds the step or tick `until` (>= w.end, > w.t; w's own interval not holding the
+// step), or the room's last (`room` level changes on, > 0), where the generator's own loop
+// goes on.
+void walk_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until);
 
 // The reference: the same walk one level at a time (0-long intervals pass, adding no phase).
 bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);

@@ -351,20 +351,20 @@ int64_t StepGenerator::plain_levels() const {
 }
 
 bool StepGenerator::solve_ramp(Tick until) {
-  // The walk to the step or the ramp's last plain level, solved (ramp_step.hpp), not one
-  // loop turn per interval: at Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2; for
-  // advance_to(), to the tick `until` if that comes first), or with kWalked levels or more
+  // The walk to the step or the ramp's last plain level (for advance_to(), to the tick
+  // `until` if that comes first), solved (ramp_step.hpp), not one loop turn per interval:
+  // at Z < 1 (a CiA 402 acceleration above 4.9 M steps/s^2), or with kWalked levels or more
   // to go (a fine grid near rest: thousands of levels in a step; fewer are faster walked).
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return false;  // Z changed mid-ramp (a quick stop)
   const int64_t room = plain_levels();
   const bool steep = cursor_.steep();
-  if (room <= 0 || (!steep && (until != kNever || room < kWalked))) return false;
+  if (room <= 0 || (!steep && room < kWalked)) return false;
   const int64_t d = ramp_.phase_per_step;
   RampWalk w{t_, interval_end_, level_, d - acc_, 0, cursor_.remainder()};
   if (until == kNever) walk_to_step(w, cursor_.grid(), up ? 1 : -1, room);
-  else walk_steep_until(w, cursor_.grid(), up ? 1 : -1, room, until);
+  else walk_until(w, cursor_.grid(), up ? 1 : -1, room, until);
   t_ = w.t, acc_ = d - w.left, level_ = w.level;
   interval_index_ += w.passed, interval_end_ = w.end;
   cursor_.advance(w.passed, w.rem);
@@ -386,9 +386,9 @@ void StepGenerator::advance_to(Tick at) {
     Tick limit = std::min(at, t_ + need - 1);
     bool ramping = phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating;
     if (ramping && interval_end_ <= limit) {
-      // Levels at one tick (Z < 1): the ticks up to `at` (or the step, or the ramp's last
-      // plain level) solved as next() solves them, not passed one at a time.
-      if (cursor_.steep() && !walked_ && solve_ramp(at)) continue;
+      // The intervals up to `at` (or the step, or the ramp's last plain level) solved as
+      // next() solves them (levels at one tick, or many), not passed one at a time.
+      if (!walked_ && solve_ramp(at)) continue;
       acc_ += level_ * (interval_end_ - t_);
       t_ = interval_end_;
       end_interval();

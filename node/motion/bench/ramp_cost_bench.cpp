@@ -2,7 +2,7 @@
 // callgrind: it runs `moves` moves of one kind through StepGenerator (peek, then next, as
 // AxisCore does) inside run_moves(), and prints the steps it took.
 //   valgrind --tool=callgrind --toggle-collect='*run_moves*'
-//   build/node/ramp_cost_bench <kind> [moves] [ramps|stop-early|stop-early-walked]
+//   build/node/ramp_cost_bench <kind> [moves] [ramps|stop-early|stop-early-walked [ticks]]
 // then Ir (the "Collected" total) / steps. `ramps` stops each move as soon as it runs at its
 // velocity (a jog stopped at the top: the ramps alone, no cruise); `stop-early` see
 // kStopAfter (then Ir / moves: the cost of a stop between two steps).
@@ -58,8 +58,10 @@ bool kind_of(const char* name, Kind& k) {
 }
 
 // `stop-early`: each move stopped this many ticks after its start (407 us; at 10^7
-// steps/s^2 before its first step, 2,200 ticks from rest: a stop between two steps).
-// `stop-early-walked`: the same with the steep ramps walked tick by tick, nothing solved.
+// steps/s^2 before its first step, 2,200 ticks from rest: a stop between two steps), or
+// after the ticks a fifth argument gives (`slow` 300000: between its first two steps, at
+// levels 2,862 and 4,048, a level every 77 ticks). `stop-early-walked`: the same with
+// every ramp interval walked, nothing solved.
 constexpr Tick kStopAfter = 2'000;
 
 struct Totals {
@@ -70,7 +72,7 @@ struct Totals {
 // Not inlined: callgrind's --toggle-collect names it.
 enum class Mode { Whole, Ramps, StopEarly, StopEarlyWalked };
 
-[[gnu::noinline]] Totals run_moves(const Kind& k, int moves, Mode mode) {
+[[gnu::noinline]] Totals run_moves(const Kind& k, int moves, Mode mode, Tick stop_after) {
   StepGenerator g;
   g.walk_ramps(mode == Mode::StopEarlyWalked);
   const bool ramps_only = mode == Mode::Ramps;
@@ -79,7 +81,7 @@ enum class Mode { Whole, Ramps, StopEarly, StopEarlyWalked };
   for (int m = 0; m < moves; ++m) {
     g.start(k.ramp, t, m % 2 ? -1 : +1, k.steps);
     const bool early = mode == Mode::StopEarly || mode == Mode::StopEarlyWalked;
-    if (early) g.stop(t + kStopAfter);
+    if (early) g.stop(t + stop_after);
     Step s;
     bool stopped = early;
     while (g.peek() && g.next(s)) {
@@ -102,7 +104,7 @@ int main(int argc, char** argv) {
   if (argc < 2 || !kind_of(argv[1], k)) {
     std::fprintf(stderr,
                  "usage: ramp_cost_bench horner|hp|cia402|scurve|slow|steep [moves] "
-                 "[ramps|stop-early|stop-early-walked]\n");
+                 "[ramps|stop-early|stop-early-walked [ticks]]\n");
     return 2;
   }
   const int moves = argc > 2 ? std::atoi(argv[2]) : 20;
@@ -111,7 +113,8 @@ int main(int argc, char** argv) {
   if (std::strcmp(how, "ramps") == 0) mode = Mode::Ramps;
   if (std::strcmp(how, "stop-early") == 0) mode = Mode::StopEarly;
   if (std::strcmp(how, "stop-early-walked") == 0) mode = Mode::StopEarlyWalked;
-  const Totals t = run_moves(k, moves, mode);
+  const Tick stop_after = argc > 4 ? std::atoll(argv[4]) : kStopAfter;
+  const Totals t = run_moves(k, moves, mode, stop_after);
   std::printf("%s: %lld steps in %d moves%s%s (checksum %lld)\n", argv[1],
               static_cast<long long>(t.steps), moves, *how != 0 ? ", " : "", how,
               static_cast<long long>(t.checksum % 1'000'003));

@@ -171,7 +171,7 @@ TEST(SteepWalk, TheTickWalkIsTheLevelWalk) {
   }
 }
 
-// The reference of walk_steep_until: StepGenerator::advance_to()'s loop, an interval at a
+// The reference of walk_until: StepGenerator::advance_to()'s loop, an interval at a
 // time (the 0-long ones after a 1-long one together), passing each that holds no step and
 // ends by `until` until it reaches that tick, at most to the room.
 void walk_ticks_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
@@ -199,7 +199,7 @@ TEST(SteepWalk, UntilATickIsTheTickWalks) {
     const Tick until = first + pick(rng, 0, std::max<Tick>(to_step.t - first + 2, 0));
     RampWalk walked = start, solved = start;
     walk_ticks_until(walked, g, dir, room, until);
-    walk_steep_until(solved, g, dir, room, until);
+    walk_until(solved, g, dir, room, until);
     expect_same(walked, solved);
     if (::testing::Test::HasFailure()) {
       ADD_FAILURE() << "rho " << g.rho << " den " << g.den << " L " << start.level << " left "

@@ -23,12 +23,12 @@ IntervalGrid grid_of(int64_t num, int64_t den) { return IntervalGrid{num / den, 
 // Walks that ended at the room's last interval, 5 or more levels on (the step beyond it).
 int64_t beyond_the_room = 0;
 
-// The level changes the walk made to reach its step (0 where it did not, or not asked).
-int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t top_level,
-                         int64_t top_left) {
-  const int64_t dir = rng() % 2 ? 1 : -1;
+// A start of a walk on grid g: levels and phases of every size up to the top, most of
+// them far below it, a room of levels going up or down (levels stay >= 1 going down).
+RampWalk random_start(std::mt19937_64& rng, const IntervalGrid& g, int64_t top_level,
+                      int64_t top_left, int64_t& dir, int64_t& room) {
+  dir = rng() % 2 ? 1 : -1;
   RampWalk start;
-  // Levels and phases of every size up to the top, most of them far below it.
   start.level = pick(rng, 1, int64_t{1} << pick(rng, 0, 63 - __builtin_clzll(top_level)));
   start.t = pick(rng, 0, 1'000'000);
   start.end = start.t + pick(rng, 0, g.q + 1);
@@ -36,8 +36,15 @@ int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t to
   const int64_t reach = std::min(top_left, start.level * (g.q + 1) * 2'000);
   start.left = pick(rng, 1, int64_t{1} << pick(rng, 0, 63 - __builtin_clzll(reach)));
   start.rem = pick(rng, 0, g.den - 1);
-  // Levels stay >= 1 going down.
-  const int64_t room = dir > 0 ? pick(rng, 0, 1'000'000) : pick(rng, 0, start.level - 1);
+  room = dir > 0 ? pick(rng, 0, 1'000'000) : pick(rng, 0, start.level - 1);
+  return start;
+}
+
+// The level changes the walk made to reach its step (0 where it did not, or not asked).
+int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t top_level,
+                         int64_t top_left) {
+  int64_t dir = 0, room = 0;
+  const RampWalk start = random_start(rng, g, top_level, top_left, dir, room);
   if (start.level * (start.end - start.t) >= start.left) return 0;  // the caller's case
   RampWalk walked = start, solved = start;
   const bool a = walk_levels(walked, g, dir, room);
@@ -99,6 +106,63 @@ TEST(RampWalk, HugeLevelsAndStepsTakeTheWidePath) {
   });
 }
 
+// The reference of walk_until: StepGenerator::advance_to()'s loop, an interval at a time,
+// passing each that holds no step and ends by `until`, at most to the room.
+void walk_levels_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until) {
+  while (w.level * (w.end - w.t) < w.left && w.end <= until && w.passed < room) {
+    w.left -= w.level * (w.end - w.t);
+    w.t = w.end;
+    w.level += dir;
+    ++w.passed;
+    w.end = w.t + g.next_length(w.rem);
+  }
+}
+
+TEST(RampWalk, UntilATickIsTheLevelWalks) {
+  // advance_to() between two steps (a stop, a new velocity) on grids of q >= 1 ticks a
+  // level: to the interval of the step, of `until`, or the room's last, whichever comes
+  // first; every field against the loop's.
+  std::mt19937_64 rng(1206);
+  int at_tick = 0, at_step = 0, at_room = 0;
+  for (int i = 0; i < 200'000 && !::testing::Test::HasFailure(); ++i) {
+    const int64_t den = rng() % 4 == 0 ? 1 : pick(rng, 2, 1'000'000);
+    const IntervalGrid g = grid_of(pick(rng, den, den * pick(rng, 1, 200)), den);
+    int64_t dir = 0, room = 0;
+    const RampWalk start = random_start(rng, g, 1'000'000, 5'000'000, dir, room);
+    if (rng() % 2 == 0) room = std::min(room, pick(rng, 1, 40));  // ends before the step too
+    if (start.level * (start.end - start.t) >= start.left || room <= 0) continue;
+    RampWalk to_step = start;
+    walk_levels(to_step, g, dir, room);
+    // After w's tick and at or after its interval's end, as advance_to() calls it; up to
+    // past the end of the interval the walk to the step stops in.
+    const Tick first = std::max(start.end, start.t + 1);
+    const Tick until = first + pick(rng, 0, std::max<Tick>(to_step.end - first + 2, 0));
+    RampWalk walked = start, solved = start;
+    walk_levels_until(walked, g, dir, room, until);
+    walk_until(solved, g, dir, room, until);
+    EXPECT_EQ(walked.t, solved.t);
+    EXPECT_EQ(walked.end, solved.end);
+    EXPECT_EQ(walked.level, solved.level);
+    EXPECT_EQ(walked.left, solved.left);
+    EXPECT_EQ(walked.passed, solved.passed);
+    EXPECT_EQ(walked.rem, solved.rem);
+    if (::testing::Test::HasFailure()) {
+      ADD_FAILURE() << "q " << g.q << " rho " << g.rho << " den " << g.den << " L " << start.level
+                    << " left " << start.left << " rem " << start.rem << " end-t "
+                    << start.end - start.t << " dir " << dir << " room " << room << " until-end "
+                    << until - start.end;
+    }
+    const bool holds_step = walked.level * (walked.end - walked.t) >= walked.left;
+    at_step += holds_step ? 1 : 0;
+    at_tick += !holds_step && walked.end > until ? 1 : 0;  // the interval that holds it
+    at_room += !holds_step && walked.end <= until ? 1 : 0;
+  }
+  // Each way of stopping was tried.
+  EXPECT_GT(at_tick, 20'000);
+  EXPECT_GT(at_step, 20'000);
+  EXPECT_GT(at_room, 1'000);
+}
+
 TEST(RampWalk, IntervalsOfNoTicksAreSolvedTickByTick) {
   // Z = 1/3: three levels at each tick, tick i at level 10 + 3i; the first 22 add 979 of
   // the 1,000 phase to come, the 23rd holds the step (ramp_step_steep_test.cpp for more).
@@ -129,12 +193,20 @@ std::vector<Tick> run(const RampSpec& r, int64_t distance, Taking taking, std::m
     if (changes > 0 && static_cast<int64_t>(out.size()) == change_at) {
       --changes;
       change_at += pick(rng, 10, 400);
+      // At the step, or (1 in 2) a tick before the next one: the generator first passes
+      // the intervals between (advance_to), thousands of them near rest on a fine grid.
+      Tick at = s.time;
+      if (rng() % 2 == 0) {
+        StepGenerator ahead = g;
+        Step following;
+        if (ahead.next(following)) at += pick(rng, 0, following.time - s.time - 1);
+      }
       switch (rng() % 4) {
-        case 0: g.change_velocity(s.time, pick(rng, 1, r.run_level)); break;
-        case 1: g.retarget(s.time, pick(rng, 1, 3'000), r); break;
-        case 2: g.stop(s.time); break;
+        case 0: g.change_velocity(at, pick(rng, 1, r.run_level)); break;
+        case 1: g.retarget(at, pick(rng, 1, 3'000), r); break;
+        case 2: g.stop(at); break;
         default:
-          g.stop(s.time, Rational{r.decel_ticks_per_level.num, 2 * r.decel_ticks_per_level.den});
+          g.stop(at, Rational{r.decel_ticks_per_level.num, 2 * r.decel_ticks_per_level.den});
           break;
       }
     }
@@ -142,8 +214,9 @@ std::vector<Tick> run(const RampSpec& r, int64_t distance, Taking taking, std::m
   return out;
 }
 
-// Random moves with up to three changes on grids of `accels` and `velocities`: every step
-// peeked, taken by next() alone and walked falls on the same tick.
+// Random moves with up to three changes (at a step or between two) on grids of `accels`
+// and `velocities`: every step peeked, taken by next() alone and walked falls on the same
+// tick.
 void expect_same_moves(uint64_t seed, int moves, int64_t accel_lo, int64_t accel_hi, int64_t v_lo,
                        int64_t v_hi, int64_t distance_hi) {
   std::mt19937_64 rng(seed);
