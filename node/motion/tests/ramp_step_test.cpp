@@ -20,6 +20,15 @@ int64_t pick(std::mt19937_64& rng, int64_t lo, int64_t hi) {
 
 IntervalGrid grid_of(int64_t num, int64_t den) { return IntervalGrid{num / den, num % den, den}; }
 
+void expect_same(const RampWalk& walked, const RampWalk& solved) {
+  EXPECT_EQ(walked.t, solved.t);
+  EXPECT_EQ(walked.end, solved.end);
+  EXPECT_EQ(walked.level, solved.level);
+  EXPECT_EQ(walked.left, solved.left);
+  EXPECT_EQ(walked.passed, solved.passed);
+  EXPECT_EQ(walked.rem, solved.rem);
+}
+
 // Walks that ended at the room's last interval, 5 or more levels on (the step beyond it).
 int64_t beyond_the_room = 0;
 
@@ -53,12 +62,7 @@ int64_t expect_same_walk(std::mt19937_64& rng, const IntervalGrid& g, int64_t to
                   << " left " << start.left << " dir " << dir;
   if (a != b) return 0;
   // Found or not (then at the room's last interval, where the generator's loop goes on).
-  EXPECT_EQ(walked.t, solved.t);
-  EXPECT_EQ(walked.end, solved.end);
-  EXPECT_EQ(walked.level, solved.level);
-  EXPECT_EQ(walked.left, solved.left);
-  EXPECT_EQ(walked.passed, solved.passed);
-  EXPECT_EQ(walked.rem, solved.rem);
+  expect_same(walked, solved);
   if (!a && walked.passed >= 5) ++beyond_the_room;
   return a ? walked.passed : 0;
 }
@@ -140,12 +144,7 @@ TEST(RampWalk, UntilATickIsTheLevelWalks) {
     RampWalk walked = start, solved = start;
     walk_levels_until(walked, g, dir, room, until);
     walk_until(solved, g, dir, room, until);
-    EXPECT_EQ(walked.t, solved.t);
-    EXPECT_EQ(walked.end, solved.end);
-    EXPECT_EQ(walked.level, solved.level);
-    EXPECT_EQ(walked.left, solved.left);
-    EXPECT_EQ(walked.passed, solved.passed);
-    EXPECT_EQ(walked.rem, solved.rem);
+    expect_same(walked, solved);
     if (::testing::Test::HasFailure()) {
       ADD_FAILURE() << "q " << g.q << " rho " << g.rho << " den " << g.den << " L " << start.level
                     << " left " << start.left << " rem " << start.rem << " end-t "
