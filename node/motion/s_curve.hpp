@@ -135,10 +135,10 @@ class SCurve {
   // falls beyond the segment the full search finds it.
   struct Even {
     int seg = -1;          // the segment q and r are for; -1: none
-    bool ready = false;    // peeked_ is this path's step (next): take_even() takes it
+    bool ready = false;    // peeked_ is this path's step: take_even() takes it
     bool entered = false;  // local_[cur_] is this path's (c1, seg -1)
     Tick q = 0;
-    Tick next = 0, bound = 0;          // the peeked step; the segment's last tick
+    Tick bound = 0;                    // the segment's last tick
     __int128 r = 0, c1 = 0, over = 0;  // over: the peeked step's overshoot, 0 <= over < c1
   };
   void seat_even(int seg, const Segment& g);

@@ -34,7 +34,6 @@ std::optional<Tick> SCurve::even_step(const Local& l, const Segment& g) {
   const auto d = static_cast<Tick>((l.gap + c1 - 1) / c1);
   if (d > g.len - l.tau) return std::nullopt;  // beyond the segment: the full search
   even_.over = d * c1 - l.gap;
-  even_.next = g.start + l.tau + d;
   even_.ready = true;
   even_.entered = false;
   Local& n = local_[cur_ ^ 1];  // the slope at the step, read by slope()
@@ -42,13 +41,13 @@ std::optional<Tick> SCurve::even_step(const Local& l, const Segment& g) {
   n.b1 = c1;
   pending_quick_ = true;
   peeked_seg_ = l.seg;
-  return even_.next;
+  return g.start + l.tau + d;
 }
 
 Tick SCurve::take_even() {
   // next_step() for a step of this path (same segment, no seat): taken, and the one after
   // it peeked at once (the generator peeks after every step), with no search.
-  const Tick t = even_.next;
+  const Tick t = *peeked_;  // even_step()'s, or the one the last take_even() peeked
   last_ = t;
   ++steps_;
   ++quick_steps_;
@@ -78,7 +77,6 @@ Tick SCurve::take_even() {
     return t;
   }
   even_.over = over;
-  even_.next = next;
   peeked_ = next;
   return t;
 }
