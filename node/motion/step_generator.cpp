@@ -42,6 +42,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   marks_ = Marks{};
   marks_.start = start;
   decel_tick_ = -1;
+  decel_check_after_ = -1;
   decel_floor_ = ramp.base_level;
   holding_ = false;
   then_.reset();
@@ -64,6 +65,16 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   level_ = ramp.base_level + 1;
   interval_index_ = 0;
   interval_end_ = t_ + interval_length(ramp.accel_ticks_per_level, 0);
+  if (distance) decel_check_after_ = steps_before_decel_check(*distance);
+}
+
+int64_t StepGenerator::steps_before_decel_check(int64_t distance) const {
+  // The ramp up never passes peak_level_, so the ramp down adds at most decel_phase(peak)
+  // and the accumulator holds less than d: with k = ceil(decel_phase(peak)/d) + 1 steps
+  // or more left, k·d > decel_phase(level) + acc and decel_needed() is false.
+  const int64_t d = ramp_.phase_per_step;
+  const __int128 k = (ramp_.decel_phase(peak_level_) + d - 1) / d + 1;
+  return k >= distance ? -1 : distance - static_cast<int64_t>(k);
 }
 
 std::optional<int64_t> StepGenerator::remaining() const {
@@ -178,7 +189,8 @@ void StepGenerator::end_interval() {
     phase_ = MotionPhase::Idle;
     marks_.end = t_;
     if (marks_.decel_end < 0) marks_.decel_end = t_;
-  } else if (distance_ && !stopping_ && phase_ == MotionPhase::Accelerating && decel_needed()) {
+  } else if (phase_ == MotionPhase::Accelerating && steps_done_ > decel_check_after_ && distance_ &&
+             !stopping_ && decel_needed()) {
     // A move too short for the running velocity turns where the ramps meet.
     begin_decel();
   } else if (phase_ == MotionPhase::Running || phase_ == MotionPhase::Creeping) {

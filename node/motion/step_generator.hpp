@@ -103,6 +103,7 @@ class StepGenerator {
   Tick interval_length(Rational z, int64_t k);
   void skip_empty_intervals(int64_t most);
   bool decel_needed() const;
+  int64_t steps_before_decel_check(int64_t distance) const;
   bool take_known(Step& out);
   bool next_unknown(Step& out);
   bool took_step(Step& out);
@@ -177,6 +178,10 @@ class StepGenerator {
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_
   int64_t decel_floor_ = 0;       // the level a deceleration ends at (base, or a lower velocity)
   std::optional<RampSpec> then_;  // change_velocity(): the grid to move to once there
+  // A ramp up to a target asks decel_needed() only after this many steps: until then the
+  // steps left cover the whole ramp down from the peak (start() sets it; a change that may
+  // raise the peak, bring the end nearer or change the ramp down sets -1: ask every step).
+  int64_t decel_check_after_ = -1;
   int64_t steps_done_ = 0;
   Marks marks_;
   // The S-curve's state, on the heap (the hot path copies the generator; a trapezoid

@@ -24,6 +24,7 @@ void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSp
   // ramps up again.
   if (distance_ && phase_ == MotionPhase::Decelerating && !holding_ && level <= level_) return;
   then_ = then;
+  decel_check_after_ = -1;  // a higher peak: decel_needed() at every step up
   if (level > level_) {
     // Intervals at level+1 .. target, Z_A each (the same convention as a start).
     peak_level_ = level;
@@ -105,6 +106,7 @@ void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
   advance_to(at);
   distance_ = steps_done_ + std::max<int64_t>(steps, 0);
   ramp_.decel_ticks_per_level = ramp.decel_ticks_per_level;
+  decel_check_after_ = -1;  // a nearer end, another ramp down
   if (steps <= 0) {
     halt(t_);
     return;
