@@ -70,11 +70,17 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
 
 int64_t StepGenerator::steps_before_decel_check(int64_t distance) const {
   // The ramp up never passes peak_level_, so the ramp down adds at most decel_phase(peak)
-  // and the accumulator holds less than d: with k = ceil(decel_phase(peak)/d) + 1 steps
-  // or more left, k·d > decel_phase(level) + acc and decel_needed() is false.
-  const int64_t d = ramp_.phase_per_step;
-  const __int128 k = (ramp_.decel_phase(peak_level_) + d - 1) / d + 1;
-  return k >= distance ? -1 : distance - static_cast<int64_t>(k);
+  // and the accumulator holds less than d: with k >= decel_phase(peak)/d + 2 steps left,
+  // k·d > decel_phase(level) + acc and decel_needed() is false. In doubles with room to
+  // spare (a 128-bit division here cost a short move more than its steps saved; asking the
+  // exact test a step or two early changes nothing).
+  const double span = static_cast<double>(peak_level_ - ramp_.base_level);
+  const double levels = span * static_cast<double>(peak_level_ + ramp_.base_level + 1) / 2;
+  const Rational z = ramp_.decel_ticks_per_level;
+  const double k = levels * static_cast<double>(z.num) / static_cast<double>(z.den) /
+                       static_cast<double>(ramp_.phase_per_step) * (1 + 1e-9) +
+                   3;
+  return k < static_cast<double>(distance) ? distance - static_cast<int64_t>(k) : -1;
 }
 
 std::optional<int64_t> StepGenerator::remaining() const {
