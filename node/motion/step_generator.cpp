@@ -412,6 +412,14 @@ void StepGenerator::advance_to(Tick at) {
       end_interval();
       continue;
     }
+    if (phase_ == MotionPhase::Running && decel_tick_ >= 0 && decel_tick_ <= limit) {
+      // The ramp down to the target began on its tick, as next() begins it: a change that
+      // comes after it (and before the next step) finds the motion ramping down.
+      acc_ += level_ * (decel_tick_ - t_);
+      t_ = decel_tick_;
+      begin_decel();
+      continue;
+    }
     acc_ += level_ * (limit - t_);
     t_ = limit;
     break;

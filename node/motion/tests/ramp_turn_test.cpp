@@ -2,13 +2,16 @@
 // profile ramps: HP PROFILE FREQ, CiA 402 profile position): after the first step of the
 // ramp up at which the phase still to come, (distance - steps)·D, is no more than the ramp
 // down from the current level adds (Z_D·sum(base + 1 .. level)) plus the accumulator's
-// phase. The reference below is the phase-accumulator model written from that rule and the
-// ramp's definition alone: interval k of a ramp lasts floor((k+1)·Z) - floor(k·Z) ticks,
-// every step the first tick at which the accumulator reaches D. The generator,
-// which asks its turn test only near the end of the ramp up (issue 13), must give every
-// step of it.
+// phase; a move that reaches its run level ramps down from the tick where the phase to come
+// equals that of the ramp down. The reference below is the phase-accumulator model written
+// from those rules and the ramp's definition alone: interval k of a ramp lasts
+// floor((k+1)·Z) - floor(k·Z) ticks, every step the first tick at which the accumulator
+// reaches D. The generator, which asks its turn test only near the end of the ramp up
+// (issue 13), must give every step of it, also after a change of velocity or of the end on
+// the way (and one that comes after the ramp down's first tick finds it ramping down).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <sstream>
 #include <string>
@@ -44,7 +47,10 @@ struct Change {
   int64_t level = 0;
   int64_t steps = 0;
   Rational decel;
-  bool in_run = false;  // the model's answer: the change came in the run (not compared)
+  // The model's answers: the change came in the run; the tick the ramp down to the target
+  // began (-1: none, or not from the run).
+  bool in_run = false;
+  Tick ramp_down_began = -1;
 };
 
 // The step times of a move of `distance` steps from tick 0, run_level > base_level.
@@ -60,18 +66,24 @@ std::vector<Tick> model_steps(RampSpec r, int64_t distance, Change& change) {
     phase = Down, k = 0;
     end = t + interval_ticks(r.decel_ticks_per_level, 0);
   };
+  const auto plan_ramp_down = [&] {  // in the run: where the phase to come equals its phase
+    const __int128 target = static_cast<__int128>(distance) * d - ramp_down_phase(r, level);
+    const __int128 now = static_cast<__int128>(steps.size()) * d + acc;
+    decel_at = now >= target ? t : t + static_cast<Tick>((target - now + level - 1) / level);
+  };
   while (static_cast<int64_t>(steps.size()) < distance) {
     const Tick need = (d - acc + level - 1) / level;  // ticks to the accumulator's step
     const bool ends = phase == Up || phase == Down;
-    if (change_at >= 0 && t + need > change_at && (!ends || end > change_at)) {
-      // The change comes first (the tests make it in a ramp, not in the run, whose ramp
-      // down is planned from the run's first tick).
+    // The change comes first, unless an interval ends or the ramp down begins by its tick.
+    if (change_at >= 0 && t + need > change_at && (!ends || end > change_at) &&
+        (phase != Run || decel_at > change_at)) {
       acc += level * (change_at - t), t = change_at;
       change.in_run = phase == Run;
       change_at = -1;
       if (change.steps > 0) {
         distance = static_cast<int64_t>(steps.size()) + change.steps;
         r.decel_ticks_per_level = change.decel;
+        if (phase == Run) plan_ramp_down();
       } else if (change.level > level) {
         phase = Up, peak = change.level, k = 0, ++level;
         end = t + interval_ticks(r.accel_ticks_per_level, 0);
@@ -79,6 +91,7 @@ std::vector<Tick> model_steps(RampSpec r, int64_t distance, Change& change) {
       continue;
     }
     if (phase == Run && t + need > decel_at) {  // the ramp down's first tick comes first
+      change.ramp_down_began = decel_at;
       acc += level * (decel_at - t), t = decel_at;
       turn();
       continue;
@@ -86,10 +99,8 @@ std::vector<Tick> model_steps(RampSpec r, int64_t distance, Change& change) {
     if (ends && t + need > end) {  // the interval ends first
       acc += level * (end - t), t = end;
       if (phase == Up && level == peak) {
-        phase = Run;  // the ramp down begins where the phase to come equals its phase
-        const __int128 target = static_cast<__int128>(distance) * d - ramp_down_phase(r, level);
-        const __int128 now = static_cast<__int128>(steps.size()) * d + acc;
-        decel_at = now >= target ? t : t + static_cast<Tick>((target - now + level - 1) / level);
+        phase = Run;
+        plan_ramp_down();
       } else if (phase == Down && level == r.base_level + 1) {
         phase = Creep, level = std::max(r.base_level, r.min_creep_level);
       } else {
@@ -127,6 +138,7 @@ std::vector<Tick> generator_steps(const RampSpec& r, int64_t distance, Change ch
       change.at = -1;
     } else if (g.next(s)) {
       steps.push_back(s.time);
+      if (steps.size() > static_cast<size_t>(distance)) break;  // never: it ends at the target
     }
   }
   return steps;
@@ -188,53 +200,95 @@ TEST(RampTurn, ShortMovesTurnAtTheFirstStepTheRampDownNeeds) {
   }
 }
 
-// The change made one tick after the move's step j (j + 2 <= distance), compared; false if
-// there is a step at that tick or the change comes in the run (not compared).
-bool expect_change(const RampSpec& r, int64_t distance, size_t j, Change change) {
+// How many changes were compared, and how many of those came in the run.
+struct Compared {
+  int all = 0, in_run = 0;
+};
+
+// The change made one tick after the move's step j (j + 2 <= distance), or at its own tick
+// (between steps j and j + 1), compared, unless there is a step at that tick.
+void expect_change(const RampSpec& r, int64_t distance, size_t j, Change change,
+                   Compared& compared) {
   const std::vector<Tick> before = model_steps(r, distance);
-  change.at = before[j] + 1;
-  if (before[j + 1] == change.at) return false;
+  if (change.at < 0) change.at = before[j] + 1;
+  if (before[j + 1] == change.at) return;
   const std::vector<Tick> want = model_steps(r, distance, change);
-  if (change.in_run) return false;
+  ++compared.all;
+  compared.in_run += change.in_run ? 1 : 0;
   EXPECT_EQ(generator_steps(r, distance, change), want)
       << describe(r) << ", " << distance << " steps, at tick " << change.at << ": level "
       << change.level << " or the end " << change.steps << " steps on, Z_D " << change.decel.num
       << "/" << change.decel.den;
-  return true;
 }
 
-TEST(RampTurn, AHigherVelocityInTheRampUpKeepsTheTurn) {
-  // change_velocity() above the run level raises the peak the turn is reckoned from. (Z >= 1
+TEST(RampTurn, AHigherVelocityOnTheWayKeepsTheTurn) {
+  // change_velocity() above the run level, in the ramp up, the run or the ramp down: the
+  // peak the turn is reckoned from rises. (Z >= 1
   // here: at Z < 1 a change at a tick where several levels change leaves the last 0-long
   // interval at that tick to the new ramp, a convention this model does not write out.)
   RandomRamps ramps;
-  int compared = 0;
+  Compared compared;
   for (int i = 0; i < 3000 && !HasFailure(); ++i) {
     const RampSpec r = ramps.next(false);
-    const int64_t distance = ramps.pick(2, std::min<int64_t>(RandomRamps::whole(r) + 3, 400));
+    const int64_t distance = ramps.pick(2, std::min<int64_t>(2 * RandomRamps::whole(r) + 3, 400));
     Change change;
     change.level = r.run_level + ramps.pick(1, 2000);
-    const auto j = static_cast<size_t>(ramps.pick(0, std::min<int64_t>(distance - 2, 30)));
-    compared += expect_change(r, distance, j, change) ? 1 : 0;
+    const auto j = static_cast<size_t>(ramps.pick(0, distance - 2));
+    expect_change(r, distance, j, change, compared);
   }
-  EXPECT_GT(compared, 1500);
+  EXPECT_GT(compared.all, 2500);
+  EXPECT_GT(compared.in_run, 100);
 }
 
-TEST(RampTurn, ANearerEndInTheRampUpTurnsForIt) {
-  // retarget() (an indexed move's index) brings the end nearer and changes the ramp down.
+TEST(RampTurn, ANearerEndOnTheWayTurnsForIt) {
+  // retarget() (an indexed move's index) brings the end nearer and changes the ramp down,
+  // in the ramp up, the run or the ramp down.
   RandomRamps ramps;
-  int compared = 0;
+  Compared compared;
   for (int i = 0; i < 3000 && !HasFailure(); ++i) {
-    const RampSpec r = ramps.next(false);  // Z >= 1: see AHigherVelocityInTheRampUpKeepsTheTurn
-    const int64_t distance = ramps.pick(3, std::min<int64_t>(RandomRamps::whole(r) + 3, 400));
-    const int64_t j = ramps.pick(0, std::min<int64_t>(distance - 3, 30));
+    const RampSpec r = ramps.next(false);  // Z >= 1: see AHigherVelocityOnTheWayKeepsTheTurn
+    const int64_t distance = ramps.pick(3, std::min<int64_t>(2 * RandomRamps::whole(r) + 3, 400));
+    const int64_t j = ramps.pick(0, distance - 3);
     const int64_t z = ramps.pick(200, 4000);
     Change change;
     change.steps = ramps.pick(1, distance - j - 2);
     change.decel = {z, ramps.pick(1, z / 2)};
-    compared += expect_change(r, distance, static_cast<size_t>(j), change) ? 1 : 0;
+    expect_change(r, distance, static_cast<size_t>(j), change, compared);
   }
-  EXPECT_GT(compared, 1500);
+  EXPECT_GT(compared.all, 2500);
+  EXPECT_GT(compared.in_run, 100);
+}
+
+TEST(RampTurn, AChangeAfterTheRampDownBeganFindsItRampingDown) {
+  // A change between the ramp down's first tick and the step after it (a run to a target,
+  // its ramp down begun on the tick where the phase to come equals the ramp's): the motion
+  // is ramping down from that tick, not still running.
+  RandomRamps ramps;
+  Compared compared;
+  for (int i = 0; i < 3000 && !HasFailure(); ++i) {
+    const RampSpec r = ramps.next(false);  // Z >= 1: see AHigherVelocityOnTheWayKeepsTheTurn
+    const int64_t whole = RandomRamps::whole(r);
+    if (whole + 5 > 400) continue;
+    const int64_t distance = ramps.pick(whole + 5, 400);
+    Change none;
+    const std::vector<Tick> before = model_steps(r, distance, none);
+    const Tick began = none.ramp_down_began;
+    if (began <= before.front()) continue;  // none (-1), or before the first step
+    const auto j = static_cast<size_t>(std::upper_bound(before.begin(), before.end(), began) -
+                                       before.begin() - 1);
+    if (j + 3 > before.size() || before[j + 1] - began < 2) continue;  // a step left after it
+    Change change;
+    change.at = ramps.pick(began + 1, before[j + 1] - 1);
+    if (i % 2 == 0) {
+      change.level = r.run_level + ramps.pick(1, 2000);
+    } else {
+      change.steps = ramps.pick(1, distance - static_cast<int64_t>(j) - 2);
+      const int64_t z = ramps.pick(200, 4000);
+      change.decel = {z, ramps.pick(1, z / 2)};
+    }
+    expect_change(r, distance, j, change, compared);
+  }
+  EXPECT_GT(compared.all, 500);
 }
 
 TEST(RampTurn, ProfileRampsTurnAtTheFirstStepTheRampDownNeeds) {
