@@ -180,6 +180,20 @@ void StepGenerator::end_interval() {
   skip_empty_intervals(level_ - floor);
 }
 
+[[gnu::always_inline]] inline Tick StepGenerator::peek_plain() {
+  // In a ramp, most steps fall in an interval reached by plain level changes (one up or
+  // down, the phase unchanged): the step next() takes, found without copying the
+  // generator. Anything else first (the ramp's end, its top): kUnpeeked. The step in this
+  // interval (most of a gentle ramp's, Horner's) here, inlined; one further on is
+  // peek_beyond()'s.
+  ahead_.valid = false;
+  const int64_t left = ramp_.phase_per_step - acc_;  // the phase still to come
+  // This interval's phase: far inside int64 where no step falls, below one step's phase.
+  const int64_t phase = level_ * (interval_end_ - t_);
+  if (phase >= left) return t_ + (left + level_ - 1) / level_;
+  return peek_beyond(left, phase);
+}
+
 // Inlined in both callers: a call more per step costs ~15 % in a run (6.5 ns a step).
 [[gnu::always_inline]] inline bool StepGenerator::took_step(Step& out) {
   // The step at t_ is taken: counted, and what follows it decided.
@@ -210,7 +224,7 @@ void StepGenerator::end_interval() {
   return true;
 }
 
-// take_known(), next_unknown() and peek_plain() on 64-byte boundaries: their loops run at
+// take_known(), next_unknown() and peek_beyond() on 64-byte boundaries: their loops run at
 // a very high rate of instructions per cycle, and where a merge elsewhere in the file moved
 // them, the same code took 5-9 % more user time (Horner's ramps in ramp_cost_bench; README
 // "Figures").
@@ -301,22 +315,17 @@ Tick StepGenerator::run_step_after() const {
 }
 
 // On a 64-byte boundary: see next().
-[[gnu::aligned(64)]] Tick StepGenerator::peek_plain() {
-  // In a ramp, most steps fall in an interval reached by plain level changes (one up or
-  // down, the phase unchanged): the step next() takes, found without copying the
-  // generator. Anything else first (the ramp's end, its top): kUnpeeked.
-  ahead_.valid = false;
+[[gnu::aligned(64)]] Tick StepGenerator::peek_beyond(int64_t left, int64_t phase) {
+  // The rest of peek_plain(): the step lies beyond this interval (`phase` < `left`).
   const int64_t d = ramp_.phase_per_step;
   const bool up = phase_ == MotionPhase::Accelerating;
   const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
   if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
   const int64_t dir = up ? 1 : -1;
   const int64_t plain = plain_levels();
-  int64_t level = level_, left = d - acc_;  // left: phase still to come
-  Tick len = interval_end_ - t_, end = interval_end_;
-  int64_t phase = level * len;  // far inside int64 where no step falls: below one step's phase
-  if (phase >= left) return t_ + (left + level - 1) / level;
   if (plain <= 0) return kUnpeeked;
+  int64_t level = level_;
+  Tick len = interval_end_ - t_, end = interval_end_;
   // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
   // (q + 1)·kWalked·(L + kWalked)), or several levels at one tick (Z < 1): solved at once
   // (ramp_step.hpp), not walked.

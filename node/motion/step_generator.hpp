@@ -113,6 +113,7 @@ class StepGenerator {
   int64_t plain_levels() const;
   bool solve_ramp(Tick until = kNever);
   Tick peek_plain();
+  Tick peek_beyond(int64_t left, int64_t phase);
   Tick run_step_after() const;
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
   // walked (the solve's divisions and square root cost more cycles than ~30 additions),
