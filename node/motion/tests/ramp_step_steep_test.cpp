@@ -13,13 +13,13 @@
 
 #include "node/motion/ramp_step.hpp"
 #include "node/motion/step_generator.hpp"
+#include "node/motion/tests/ramp_walk_check.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-int64_t pick(std::mt19937_64& rng, int64_t lo, int64_t hi) {
-  return lo + static_cast<int64_t>(rng() % static_cast<uint64_t>(hi - lo + 1));
-}
+using walk_check::expect_same;
+using walk_check::pick;
 
 // Log-uniform in 1..hi: every size, most far below hi.
 int64_t pick_size(std::mt19937_64& rng, int64_t hi) {
@@ -51,15 +51,6 @@ bool walk_ticks(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
     pass_interval(w, g, dir, room);
   }
   return true;
-}
-
-void expect_same(const RampWalk& a, const RampWalk& b) {
-  EXPECT_EQ(a.t, b.t);
-  EXPECT_EQ(a.end, b.end);
-  EXPECT_EQ(a.level, b.level);
-  EXPECT_EQ(a.left, b.left);
-  EXPECT_EQ(a.passed, b.passed);
-  EXPECT_EQ(a.rem, b.rem);
 }
 
 // A q = 0 grid: Z = num/den log-uniform from just below 1 down to `finest`, den up to top_den.

@@ -10,24 +10,15 @@
 
 #include "node/motion/ramp_step.hpp"
 #include "node/motion/step_generator.hpp"
+#include "node/motion/tests/ramp_walk_check.hpp"
 
 namespace stepnode::motion {
 namespace {
 
-int64_t pick(std::mt19937_64& rng, int64_t lo, int64_t hi) {
-  return lo + static_cast<int64_t>(rng() % static_cast<uint64_t>(hi - lo + 1));
-}
+using walk_check::expect_same;
+using walk_check::pick;
 
 IntervalGrid grid_of(int64_t num, int64_t den) { return IntervalGrid{num / den, num % den, den}; }
-
-void expect_same(const RampWalk& walked, const RampWalk& solved) {
-  EXPECT_EQ(walked.t, solved.t);
-  EXPECT_EQ(walked.end, solved.end);
-  EXPECT_EQ(walked.level, solved.level);
-  EXPECT_EQ(walked.left, solved.left);
-  EXPECT_EQ(walked.passed, solved.passed);
-  EXPECT_EQ(walked.rem, solved.rem);
-}
 
 // Walks that ended at the room's last interval, 5 or more levels on (the step beyond it).
 int64_t beyond_the_room = 0;
