@@ -38,6 +38,8 @@ class IntervalCursor {
   bool steep() const { return q_ == 0 && rho_ > 0; }
   // The lengths as q, q + 1 (ramp_step.hpp's walk) and the remainder after the last one.
   IntervalGrid grid() const { return {q_, rho_, z_.den}; }
+  // Z = q + rho/den in a double, for the solve's guess (solve_to_step).
+  double z() const { return z_real_; }
   int64_t remainder() const { return rem_; }
   // Passes `n` intervals a walk went through (walk_to_step), `rem` the remainder after them.
   void advance(int64_t n, int64_t rem) {
@@ -59,12 +61,14 @@ class IntervalCursor {
     q_ = z.num / z.den;
     rho_ = z.num % z.den;
     rem_ = static_cast<int64_t>(end % z.den);
+    z_real_ = static_cast<double>(q_) + static_cast<double>(rho_) / static_cast<double>(z.den);
     return static_cast<Tick>(end / z.den - begin / z.den);
   }
 
   Rational z_{0, 0};  // den 0: no Z yet, the first call seeks
   int64_t k_ = -2;
   int64_t q_ = 0, rho_ = 0, rem_ = 0;
+  double z_real_ = 0;
 };
 
 }  // namespace stepnode::motion

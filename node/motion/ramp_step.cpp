@@ -82,47 +82,6 @@ bool walk_runs(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, in
   }
 }
 
-// sum_{i=0}^{n-1} floor((a·i + b)/m) for n >= 0, m > 0, a, b >= 0, a·n + b and the sum
-// within T. Each round cuts the terms to the whole parts of a/m and b/m plus a remainder
-// line whose lattice points are counted the other way round (the axes swapped), so n
-// shrinks like the numbers in Euclid's algorithm.
-template <typename T>
-[[gnu::always_inline]] inline T floor_sum(T n, T m, T a, T b) {
-  T sum = 0;
-  for (;;) {
-    if (a >= m) {
-      sum += n * (n - 1) / 2 * (a / m);
-      a %= m;
-    }
-    if (b >= m) {
-      sum += n * (b / m);
-      b %= m;
-    }
-    const T y = a * n + b;  // the line's height at i = n
-    if (y < m) return sum;
-    n = y / m;
-    b = y % m;
-    std::swap(m, a);
-  }
-}
-
-// J(C) = sum_{i=1}^{C} j_i, j_i = ceil((i·den - rem)/rho): the intervals (counted from the
-// walk's start) whose remainder carries, the i-th carry where rem + j·rho first reaches
-// i·den. A few are added directly; more with the floor sum. Both inlined: walk_to_step
-// calls them for every step, and a call costs as much as the few additions.
-template <typename T>
-[[gnu::always_inline]] inline T carry_positions(T count, T rho, T den, T rem) {
-  const T first = den - rem + rho - 1;  // i·den - rem + rho - 1 at i = 1
-  if (count > 8) return floor_sum<T>(count, rho, den, first);
-  T sum = 0;
-  for (T i = 0, num = first; i < count; ++i, num += den) sum += num / rho;
-  return sum;
-}
-
-int64_t carry_positions(int64_t count, const IntervalGrid& g, int64_t rem) {
-  return carry_positions<int64_t>(count, g.rho, g.den, rem);
-}
-
 // The steep walk (q = 0: several levels at one tick) in T: int64_t where the bounds below
 // fit, else __int128. With the roles of ticks and levels swapped, tick i (1, 2, ...) after
 // the walk's interval is the interval of the i-th carry, j_i = ceil((i·den - rem)/rho),
@@ -180,8 +139,9 @@ RoomEnd room_end(const IntervalGrid& g, int64_t rem, int64_t room) {
 // x = 2·left / (B + sqrt(B² + 2·dir·left·den/rho)), rounded up, in 1..most. The ceilings'
 // deviations from 1/2 stay within a few levels, so the guess is within a tick or two
 // (fewer the higher the levels).
-int64_t guess_tick(const RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t left,
-                   int64_t most) {
+// Inlined: the steep walk asks it for every step.
+[[gnu::always_inline]] inline int64_t guess_tick(const RampWalk& w, const IntervalGrid& g,
+                                                 int64_t dir, int64_t left, int64_t most) {
   const double zi = static_cast<double>(g.den) / static_cast<double>(g.rho);  // levels per tick
   const double b = static_cast<double>(w.level) +
                    static_cast<double>(dir) *
@@ -336,64 +296,22 @@ void walk_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, T
 }
 
 bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {
-  const int64_t q = g.q, rho = g.rho, den = g.den, level = w.level, rem = w.rem;
-  if (q == 0) return walk_steep(w, g, dir, room);
+  if (g.q == 0) return walk_steep(w, g, dir, room);
   if (room <= 0) return false;
-  const int64_t phase = level * (w.end - w.t);
+  const int64_t phase = w.level * (w.end - w.t);
   const int64_t left = w.left - phase;  // after this interval
-  // Interval j = 1, 2, ... after this one runs at level L + dir·j for q + c_j ticks, c_j
-  // the carry of rem + j·rho past a multiple of den. Of the first m, C(m) =
-  // floor((rem + m·rho)/den) carry, so they last S(m) = q·m + C(m) ticks and add the phase
-  //   W(m) = q·(m·L + dir·m(m+1)/2) + C(m)·L + dir·J(C(m)).
-  // The step falls in the first interval m with W(m) >= left. In 64 bits: m stays below
-  // left/q + 2 (each interval adds at least q), so every product here is below
-  // (left + q + 1)·(L + left + 2) and m·rho below (left + 2)·rho: under 2^62 with all four
-  // below 2^29, as on every grid the profiles make; else the doubles decide, and beyond
-  // them the walk from carry to carry in 128 bits.
-  if (((left | q | level | rho) >> 29) != 0) {
-    const double ld = static_cast<double>(left), qd = static_cast<double>(q);
+  // Beyond solve_to_step's 64 bits the doubles decide, and beyond them the walk from carry
+  // to carry in 128 bits.
+  if (!solves_in_64(left, w.level, g)) {
+    const double ld = static_cast<double>(left), qd = static_cast<double>(g.q);
     const double most = ld / qd + 2.0;
-    if ((ld + qd + 1.0) * (static_cast<double>(level) + most) >= 0x1p62 ||
-        most * static_cast<double>(rho) >= 0x1p61)
+    if ((ld + qd + 1.0) * (static_cast<double>(w.level) + most) >= 0x1p62 ||
+        most * static_cast<double>(g.rho) >= 0x1p61)
       return walk_runs(w, g, dir, room, phase);
   }
-  // The real m of the continuous ramp (Z = q + rho/den ticks per level) guesses it, in the
-  // form without cancellation: with b = 2L + dir and c = 2·left/Z,
-  // m = 2c / (b + sqrt(b² + 4·dir·c)). The carries' levels move W by less than a level.
-  const double z = static_cast<double>(q) + static_cast<double>(rho) / static_cast<double>(den);
-  const double c = 2.0 * static_cast<double>(left) / z;
-  const double b = static_cast<double>(2 * level + dir);
-  const double disc = std::max(b * b + 4.0 * static_cast<double>(dir) * c, 0.0);
-  int64_t m =
-      std::clamp<int64_t>(static_cast<int64_t>(2.0 * c / (b + std::sqrt(disc))) + 1, 1, room);
-  int64_t carries = (rem + (m - 1) * rho) / den;  // C(m - 1)
-  int64_t before = q * ((m - 1) * level + dir * ((m - 1) * m / 2)) + carries * level +
-                   dir * carry_positions(carries, g, rem);  // W(m - 1)
-  // One interval at a time to the first m with W(m - 1) < left <= W(m).
-  for (;;) {
-    if (m > 1 && before >= left) {  // the step is in an earlier interval
-      const int64_t earlier = (rem + (m - 2) * rho) / den;
-      --m;
-      before -= (level + dir * m) * (q + carries - earlier);
-      carries = earlier;
-      continue;
-    }
-    const int64_t through = (rem + m * rho) / den;  // C(m)
-    const Tick len = q + through - carries;
-    const int64_t after = before + (level + dir * m) * len;
-    if (after >= left || m >= room) {  // the step's interval, or the room's last (none)
-      w.t += w.end - w.t + q * (m - 1) + carries;
-      w.end = w.t + len;
-      w.level = level + dir * m;
-      w.left = left - before;
-      w.passed += m;
-      w.rem = rem + m * rho - through * den;
-      return after >= left;
-    }
-    before = after;
-    carries = through;
-    ++m;
-  }
+  const double z =
+      static_cast<double>(g.q) + static_cast<double>(g.rho) / static_cast<double>(g.den);
+  return solve_to_step(w, g, z, dir, room, left);
 }
 
 bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room) {

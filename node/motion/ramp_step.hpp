@@ -15,7 +15,10 @@
 // same way (ramp_step.cpp). Every answer is the level-by-level walk's (the reference in
 // the tests).
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include "node/motion/timebase.hpp"
 
@@ -56,6 +59,117 @@ bool walk_to_step(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room)
 // step), or the room's last (`room` level changes on, > 0), where the generator's own loop
 // goes on.
 void walk_until(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room, Tick until);
+
+// sum_{i=0}^{n-1} floor((a·i + b)/m) for n >= 0, m > 0, a, b >= 0, a·n + b and the sum
+// within T. Each round cuts the terms to the whole parts of a/m and b/m plus a remainder
+// line whose lattice points are counted the other way round (the axes swapped), so n
+// shrinks like the numbers in Euclid's algorithm.
+template <typename T>
+[[gnu::always_inline]] inline T floor_sum(T n, T m, T a, T b) {
+  T sum = 0;
+  for (;;) {
+    if (a >= m) {
+      sum += n * (n - 1) / 2 * (a / m);
+      a %= m;
+    }
+    if (b >= m) {
+      sum += n * (b / m);
+      b %= m;
+    }
+    const T y = a * n + b;  // the line's height at i = n
+    if (y < m) return sum;
+    n = y / m;
+    b = y % m;
+    std::swap(m, a);
+  }
+}
+
+// J(C) = sum_{i=1}^{C} j_i, j_i = ceil((i·den - rem)/rho): the intervals (counted from the
+// walk's start) whose remainder carries, the i-th carry where rem + j·rho first reaches
+// i·den. A few are added directly; more with the floor sum. Both inlined: solve_to_step
+// calls them for every step, and a call costs as much as the few additions.
+template <typename T>
+[[gnu::always_inline]] inline T carry_positions(T count, T rho, T den, T rem) {
+  const T first = den - rem + rho - 1;  // i·den - rem + rho - 1 at i = 1
+  if (count > 8) return floor_sum<T>(count, rho, den, first);
+  T sum = 0;
+  for (T i = 0, num = first; i < count; ++i, num += den) sum += num / rho;
+  return sum;
+}
+
+// Whether solve_to_step's 64-bit products are safe for a walk from `level` with `left` phase
+// to come after its interval (below): every product below 2^62 with all four below 2^29,
+// as on every grid the profiles make.
+inline bool solves_in_64(int64_t left, int64_t level, const IntervalGrid& g) {
+  return ((left | g.q | level | g.rho) >> 29) == 0;
+}
+
+// walk_to_step for q >= 1 where solves_in_64(): `left` is the phase to come after w's
+// interval (w.left less that interval's), `z` = q + rho/den as a double (the cursor keeps
+// it), room >= 1. Inline where each ramp step asks it (StepGenerator::peek_solved): its
+// set-up costs as much as the solve.
+//
+// The first guess is `hint` (1..kHintedMost, within left/q + 2), the levels the step
+// before spanned: a ramp's consecutive steps span nearly as many, so one or two exact
+// evaluations settle it. Else the real root of the continuous ramp; its square root and
+// divisions are a chain of ~100 cycles, the hint's a division or two.
+//
+// Interval j = 1, 2, ... after w's runs at level L + dir·j for q + c_j ticks, c_j the carry
+// of rem + j·rho past a multiple of den. Of the first m, C(m) = floor((rem + m·rho)/den)
+// carry, so they last S(m) = q·m + C(m) ticks and add the phase
+//   W(m) = q·(m·L + dir·m(m+1)/2) + C(m)·L + dir·J(C(m)).
+// The step falls in the first interval m with W(m) >= left. m stays below left/q + 2 (each
+// interval adds at least q), so every product is below (left + q + 1)·(L + left + 2) and
+// m·rho below (left + 2)·rho.
+// The real m of the continuous ramp (Z = z ticks per level) from `level` with `left` phase
+// to come, in the form without cancellation: with b = 2L + dir and c = 2·left/z,
+// m = 2c / (b + sqrt(b² + 4·dir·c)), in 1..room. The carries' levels move W (below) by less
+// than a level.
+[[gnu::always_inline]] inline int64_t root_guess(int64_t level, int64_t left, double z, int64_t dir,
+                                                 int64_t room) {
+  const double c = 2.0 * static_cast<double>(left) / z;
+  const double b = static_cast<double>(2 * level + dir);
+  const double disc = std::max(b * b + 4.0 * static_cast<double>(dir) * c, 0.0);
+  return std::clamp<int64_t>(static_cast<int64_t>(2.0 * c / (b + std::sqrt(disc))) + 1, 1, room);
+}
+
+constexpr int64_t kHintedMost = 64;
+[[gnu::always_inline]] inline bool solve_to_step(RampWalk& w, const IntervalGrid& g, double z,
+                                                 int64_t dir, int64_t room, int64_t left,
+                                                 int64_t hint = 0) {
+  const int64_t q = g.q, rho = g.rho, den = g.den, level = w.level, rem = w.rem;
+  int64_t m = hint > 0 && hint <= kHintedMost && hint * q <= left + 2 * q
+                  ? std::min(hint, room)
+                  : root_guess(level, left, z, dir, room);
+  int64_t carries = (rem + (m - 1) * rho) / den;  // C(m - 1)
+  int64_t before = q * ((m - 1) * level + dir * ((m - 1) * m / 2)) + carries * level +
+                   dir * carry_positions<int64_t>(carries, rho, den, rem);  // W(m - 1)
+  // One interval at a time to the first m with W(m - 1) < left <= W(m).
+  for (;;) {
+    if (m > 1 && before >= left) [[unlikely]] {  // the step is in an earlier interval
+      const int64_t earlier = (rem + (m - 2) * rho) / den;
+      --m;
+      before -= (level + dir * m) * (q + carries - earlier);
+      carries = earlier;
+      continue;
+    }
+    const int64_t through = (rem + m * rho) / den;  // C(m)
+    const Tick len = q + through - carries;
+    const int64_t after = before + (level + dir * m) * len;
+    if (after >= left || m >= room) [[likely]] {  // the step's interval, or the room's last
+      w.t = w.end + q * (m - 1) + carries;
+      w.end = w.t + len;
+      w.level = level + dir * m;
+      w.left = left - before;
+      w.passed += m;
+      w.rem = rem + m * rho - through * den;
+      return after >= left;
+    }
+    before = after;
+    carries = through;
+    ++m;
+  }
+}
 
 // The reference: the same walk one level at a time (0-long intervals pass, adding no phase).
 bool walk_levels(RampWalk& w, const IntervalGrid& g, int64_t dir, int64_t room);

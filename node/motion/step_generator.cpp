@@ -38,6 +38,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   steps_done_ = 0;
   acc_ = 0;
   t_ = start;
+  last_span_ = 0;
   stopping_ = false;
   marks_ = Marks{};
   marks_.start = start;
@@ -191,7 +192,7 @@ void StepGenerator::end_interval() {
   // This interval's phase: far inside int64 where no step falls, below one step's phase.
   const int64_t phase = level_ * (interval_end_ - t_);
   if (phase >= left) return t_ + (left + level_ - 1) / level_;
-  return peek_beyond(left, phase);
+  return last_span_ >= kSolveFrom ? peek_solved(left, phase) : peek_beyond(left, phase);
 }
 
 // Inlined in both callers: a call more per step costs ~15 % in a run (6.5 ns a step).
@@ -359,14 +360,36 @@ Tick StepGenerator::run_step_after() const {
   }
   // next() goes on from there.
   const Tick t = end - len;
-  ahead_ = Ahead{true, t, d - left, level, (level - level_) * dir, end, rem};
+  last_span_ = (level - level_) * dir;
+  ahead_ = Ahead{true, t, d - left, level, last_span_, end, rem};
   return t + (left + level - 1) / level;
+}
+
+// On a 64-byte boundary: see next().
+[[gnu::aligned(64)]] Tick StepGenerator::peek_solved(int64_t left, int64_t phase) {
+  // peek_beyond() for a step several levels on: the interval that holds it, solved inline
+  // (ramp_step.hpp solve_to_step; anything else is peek_far()'s).
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
+  const int64_t dir = up ? 1 : -1;
+  const int64_t plain = plain_levels();
+  if (plain <= 0) return kUnpeeked;
+  const IntervalGrid g = cursor_.grid();
+  const int64_t after = left - phase;
+  if (cursor_.steep() || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
+  RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
+  if (!solve_to_step(w, g, cursor_.z(), dir, plain, after, last_span_)) return kUnpeeked;
+  last_span_ = w.passed;
+  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
+  return w.t + (w.left + w.level - 1) / w.level;
 }
 
 Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
   // peek_plain() for a step many levels on: the interval that holds it, solved.
   RampWalk w{t_, interval_end_, level_, ramp_.phase_per_step - acc_, 0, cursor_.remainder()};
   if (!walk_to_step(w, cursor_.grid(), dir, plain)) return kUnpeeked;
+  last_span_ = w.passed;
   ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
   return w.t + (w.left + w.level - 1) / w.level;
 }
