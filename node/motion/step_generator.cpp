@@ -244,6 +244,7 @@ void StepGenerator::end_interval() {
 }
 
 [[gnu::aligned(64)]] bool StepGenerator::next_unknown(Step& out) {
+  solving_.valid = false;  // the motion may change on the way
   if (scurve_) {
     peeked_ = kUnpeeked;  // the next step may move
     return s_next(out);
@@ -286,6 +287,7 @@ void StepGenerator::end_interval() {
 }
 
 std::optional<Tick> StepGenerator::peek_unknown() {
+  solving_.valid = false;  // a change may have come since the last step
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
@@ -369,15 +371,22 @@ Tick StepGenerator::run_step_after() const {
 [[gnu::aligned(64)]] Tick StepGenerator::peek_solved(int64_t left, int64_t phase) {
   // peek_beyond() for a step several levels on: the interval that holds it, solved inline
   // (ramp_step.hpp solve_to_step; anything else is peek_far()'s).
-  const bool up = phase_ == MotionPhase::Accelerating;
-  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
-  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
-  const int64_t dir = up ? 1 : -1;
-  const int64_t plain = plain_levels();
+  if (!solving_.valid) {
+    // The ramp's direction and last plain level, and that the cursor follows its Z (not
+    // a quick stop's mid-ramp change), once for the steps taken one after another.
+    const bool up = phase_ == MotionPhase::Accelerating;
+    const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+    if (!cursor_.at(z, interval_index_)) return kUnpeeked;
+    const int64_t dir = up ? 1 : -1;
+    solving_ = Solving{true, cursor_.steep(), dir, level_ + dir * plain_levels()};
+  }
+  const int64_t dir = solving_.dir;
+  const int64_t plain = dir * (solving_.last - level_);
   if (plain <= 0) return kUnpeeked;
   const IntervalGrid g = cursor_.grid();
   const int64_t after = left - phase;
-  if (cursor_.steep() || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
+  // Levels at one tick (Z < 1), or numbers beyond 64 bits: walk_to_step's.
+  if (solving_.steep || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
   RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
   if (!solve_to_step(w, g, cursor_.z(), dir, plain, after, last_span_)) return kUnpeeked;
   last_span_ = w.passed;

@@ -183,6 +183,15 @@ class StepGenerator {
   // The levels the last peek's walk or solve passed to its step: a ramp's next step spans
   // nearly as many (the solve's first guess), and from kSolveFrom on it is solved.
   int64_t last_span_ = 0;
+  // What peek_solved() found of the ramp for the steps next() takes one after another from
+  // known steps (take_known: the same ramp phase, levels moving within its plain ones):
+  // whether its Z is below 1 (steep), its direction and last plain level. next_unknown()
+  // and peek_unknown(), the ways in after any change (each resets peeked_), clear it.
+  struct Solving {
+    bool valid = false, steep = false;
+    int64_t dir = 0, last = 0;
+  };
+  Solving solving_;
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_
