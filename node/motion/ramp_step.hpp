@@ -104,6 +104,22 @@ inline bool solves_in_64(int64_t left, int64_t level, const IntervalGrid& g) {
   return ((left | g.q | level | g.rho) >> 29) == 0;
 }
 
+// The real m of the continuous ramp (Z = z ticks per level) from `level` with `left` phase
+// to come, in the form without cancellation: with b = 2L + dir and c = 2·left/z,
+// m = 2c / (b + sqrt(b² + 4·dir·c)), in 1..room. The carries' levels move W (below) by less
+// than a level.
+[[gnu::always_inline]] inline int64_t root_guess(int64_t level, int64_t left, double z, int64_t dir,
+                                                 int64_t room) {
+  const double c = 2.0 * static_cast<double>(left) / z;
+  const double b = static_cast<double>(2 * level + dir);
+  const double disc = std::max(b * b + 4.0 * static_cast<double>(dir) * c, 0.0);
+  return std::clamp<int64_t>(static_cast<int64_t>(2.0 * c / (b + std::sqrt(disc))) + 1, 1, room);
+}
+
+// The largest hint solve_to_step takes: larger spans come near rest, where they change fast
+// from one step to the next (as 1/sqrt(k) at a ramp's k-th step) and the root guesses better.
+constexpr int64_t kHintedMost = 64;
+
 // walk_to_step for q >= 1 where solves_in_64(): `left` is the phase to come after w's
 // interval (w.left less that interval's), `z` = q + rho/den as a double (the cursor keeps
 // it), room >= 1. Inline where each ramp step asks it (StepGenerator::peek_solved): its
@@ -121,19 +137,6 @@ inline bool solves_in_64(int64_t left, int64_t level, const IntervalGrid& g) {
 // The step falls in the first interval m with W(m) >= left. m stays below left/q + 2 (each
 // interval adds at least q), so every product is below (left + q + 1)·(L + left + 2) and
 // m·rho below (left + 2)·rho.
-// The real m of the continuous ramp (Z = z ticks per level) from `level` with `left` phase
-// to come, in the form without cancellation: with b = 2L + dir and c = 2·left/z,
-// m = 2c / (b + sqrt(b² + 4·dir·c)), in 1..room. The carries' levels move W (below) by less
-// than a level.
-[[gnu::always_inline]] inline int64_t root_guess(int64_t level, int64_t left, double z, int64_t dir,
-                                                 int64_t room) {
-  const double c = 2.0 * static_cast<double>(left) / z;
-  const double b = static_cast<double>(2 * level + dir);
-  const double disc = std::max(b * b + 4.0 * static_cast<double>(dir) * c, 0.0);
-  return std::clamp<int64_t>(static_cast<int64_t>(2.0 * c / (b + std::sqrt(disc))) + 1, 1, room);
-}
-
-constexpr int64_t kHintedMost = 64;
 [[gnu::always_inline]] inline bool solve_to_step(RampWalk& w, const IntervalGrid& g, double z,
                                                  int64_t dir, int64_t room, int64_t left,
                                                  int64_t hint = 0) {
