@@ -3,6 +3,7 @@
 // step falls when it passes phase_per_step. Steps are computed in closed form per
 // constant-velocity interval, so the cost is O(1) per step at any rate.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -110,7 +111,11 @@ class StepGenerator {
   std::optional<Tick> peek_unknown();
   // The plain level changes (one up or down, the phase unchanged) before end_interval()'s
   // other cases: the ramp's top, or the level a ramp down ends or holds at.
-  int64_t plain_levels() const;
+  int64_t plain_levels() const {
+    if (phase_ == MotionPhase::Accelerating) return peak_level_ - level_;
+    return level_ - std::max(ramp_.base_level, holding_ && !stopping_ ? decel_floor_ : int64_t{0}) -
+           1;
+  }
   bool solve_ramp(Tick until = kNever);
   Tick peek_plain();
   Tick peek_beyond(int64_t left, int64_t phase);

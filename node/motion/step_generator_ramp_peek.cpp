@@ -1,0 +1,97 @@
+// The step after a ramp step, beyond the interval it falls in (StepGenerator::peek_plain()
+// finds one inside it): walked a few levels on, solved further (ramp_step.hpp). Apart from
+// step_generator.cpp, whose loop and changes these do not touch.
+#include <algorithm>
+
+#include "node/motion/ramp_step.hpp"
+#include "node/motion/step_generator.hpp"
+
+namespace stepnode::motion {
+
+// On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
+[[gnu::aligned(64)]] Tick StepGenerator::peek_beyond(int64_t left, int64_t phase) {
+  // The rest of peek_plain(): the step lies beyond this interval (`phase` < `left`).
+  const int64_t d = ramp_.phase_per_step;
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
+  const int64_t dir = up ? 1 : -1;
+  const int64_t plain = plain_levels();
+  if (plain <= 0) return kUnpeeked;
+  int64_t level = level_;
+  Tick len = interval_end_ - t_, end = interval_end_;
+  // A step beyond the next kWalked intervals (a slow start, a fine grid; they add at most
+  // (q + 1)·kWalked·(L + kWalked)), or several levels at one tick (Z < 1): solved at once
+  // (ramp_step.hpp), not walked.
+  const IntervalGrid g = cursor_.grid();
+  const double most = static_cast<double>(g.q + 1) * static_cast<double>(kWalked) *
+                      static_cast<double>(level + kWalked);
+  if (cursor_.steep() || most < static_cast<double>(left - phase)) return peek_far(dir, plain);
+  // The walk with the cursor's additions (ramp_intervals.hpp) in registers: the interval
+  // lengths are q or q + 1 (q >= 1 here), the phase of each its level times its length.
+  int64_t rem = cursor_.remainder();
+  const auto pass = [&] {
+    left -= phase;
+    level += dir;
+    len = g.next_length(rem);
+    end += len;
+    phase = level * len;
+  };
+  // Every interval is at least q long: where the next n levels (the room's, at most
+  // 2·kWalked) add at least the phase to come, the walk ends within the room, unchecked
+  // (the products stay below 4·most, far inside int64).
+  const int64_t n = std::min(plain, 2 * kWalked);
+  if (g.q * (n * level + dir * (n * (n + 1) / 2)) >= left - phase) {
+    do pass();
+    while (phase < left);
+  } else {
+    const int64_t last = level + dir * plain;  // the ramp's last plain level
+    do {
+      if (level == last) return kUnpeeked;
+      pass();
+    } while (phase < left);
+  }
+  // next() goes on from there.
+  const Tick t = end - len;
+  last_span_ = (level - level_) * dir;
+  ahead_ = Ahead{true, t, d - left, level, last_span_, end, rem};
+  return t + (left + level - 1) / level;
+}
+
+// On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
+[[gnu::aligned(64)]] Tick StepGenerator::peek_solved(int64_t left, int64_t phase) {
+  // peek_beyond() for a step several levels on: the interval that holds it, solved inline
+  // (ramp_step.hpp solve_to_step; anything else is peek_far()'s).
+  if (!solving_.valid) {
+    // The ramp's direction and last plain level, and that the cursor follows its Z (not
+    // a quick stop's mid-ramp change), once for the steps taken one after another.
+    const bool up = phase_ == MotionPhase::Accelerating;
+    const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+    if (!cursor_.at(z, interval_index_)) return kUnpeeked;
+    const int64_t dir = up ? 1 : -1;
+    solving_ = Solving{true, cursor_.steep(), dir, level_ + dir * plain_levels()};
+  }
+  const int64_t dir = solving_.dir;
+  const int64_t plain = dir * (solving_.last - level_);
+  if (plain <= 0) return kUnpeeked;
+  const IntervalGrid g = cursor_.grid();
+  const int64_t after = left - phase;
+  // Levels at one tick (Z < 1), or numbers beyond 64 bits: walk_to_step's.
+  if (solving_.steep || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
+  RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
+  if (!solve_to_step(w, g, cursor_.z(), dir, plain, after, last_span_)) return kUnpeeked;
+  last_span_ = w.passed;
+  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
+  return w.t + (w.left + w.level - 1) / w.level;
+}
+
+Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
+  // peek_plain() for a step many levels on: the interval that holds it, solved.
+  RampWalk w{t_, interval_end_, level_, ramp_.phase_per_step - acc_, 0, cursor_.remainder()};
+  if (!walk_to_step(w, cursor_.grid(), dir, plain)) return kUnpeeked;
+  last_span_ = w.passed;
+  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
+  return w.t + (w.left + w.level - 1) / w.level;
+}
+
+}  // namespace stepnode::motion
