@@ -245,7 +245,7 @@ void StepGenerator::end_interval() {
 }
 
 [[gnu::aligned(64)]] bool StepGenerator::next_unknown(Step& out) {
-  solving_.valid = false;  // the motion may change on the way
+  ramp_known_.valid = false;  // the motion may change on the way
   if (scurve_) {
     peeked_ = kUnpeeked;  // the next step may move
     return s_next(out);
@@ -288,7 +288,7 @@ void StepGenerator::end_interval() {
 }
 
 std::optional<Tick> StepGenerator::peek_unknown() {
-  solving_.valid = false;  // a change may have come since the last step
+  ramp_known_.valid = false;  // a change may have come since the last step
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();

@@ -130,6 +130,10 @@ class StepGenerator {
   // guess: fewer instructions than the walk, and less time (a guess from the square root,
   // a chain of divisions, took 2.3x the walk's time; README "Figures").
   Tick peek_solved(int64_t left, int64_t phase);
+  // Fills ramp_known_ if it is not; false where the cursor is not on the ramp's Z.
+  bool know_ramp();
+  // Hands the walk's or solve's state `w` over to next() (ahead_) and answers its step.
+  Tick step_found(const RampWalk& w);
   static constexpr int64_t kSolveFrom = 4;
   void plan_decel();
   void count_step();
@@ -188,15 +192,15 @@ class StepGenerator {
   // The levels the last peek's walk or solve passed to its step: a ramp's next step spans
   // nearly as many (the solve's first guess), and from kSolveFrom on it is solved.
   int64_t last_span_ = 0;
-  // What peek_solved() found of the ramp for the steps next() takes one after another from
+  // What know_ramp() found of the ramp for the steps next() takes one after another from
   // known steps (take_known: the same ramp phase, levels moving within its plain ones):
   // whether its Z is below 1 (steep), its direction and last plain level. next_unknown()
   // and peek_unknown(), the ways in after any change (each resets peeked_), clear it.
-  struct Solving {
+  struct KnownRamp {
     bool valid = false, steep = false;
     int64_t dir = 0, last = 0;
   };
-  Solving solving_;
+  KnownRamp ramp_known_;
   bool stopping_ = false;         // stop(): no creep after the ramp
   Tick decel_tick_ = -1;          // while running to a target: the tick deceleration begins
   bool holding_ = false;          // change_velocity() down: run on at decel_floor_

@@ -8,15 +8,32 @@
 
 namespace stepnode::motion {
 
+[[gnu::always_inline]] inline bool StepGenerator::know_ramp() {
+  // The ramp's direction, last plain level and steepness, and that the cursor follows its
+  // Z (not a quick stop's mid-ramp change): once for the steps taken one after another.
+  if (ramp_known_.valid) return true;
+  const bool up = phase_ == MotionPhase::Accelerating;
+  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
+  if (!cursor_.at(z, interval_index_)) return false;
+  const int64_t dir = up ? 1 : -1;
+  ramp_known_ = KnownRamp{true, cursor_.steep(), dir, level_ + dir * plain_levels()};
+  return true;
+}
+
+[[gnu::always_inline]] inline Tick StepGenerator::step_found(const RampWalk& w) {
+  // The walk's state for next() to go on from (ahead_), its span the next step's guess.
+  last_span_ = w.passed;
+  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
+  return w.t + (w.left + w.level - 1) / w.level;
+}
+
 // On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
 [[gnu::aligned(64)]] Tick StepGenerator::peek_beyond(int64_t left, int64_t phase) {
   // The rest of peek_plain(): the step lies beyond this interval (`phase` < `left`).
   const int64_t d = ramp_.phase_per_step;
-  const bool up = phase_ == MotionPhase::Accelerating;
-  const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
-  if (!cursor_.at(z, interval_index_)) return kUnpeeked;  // Z changed mid-ramp (a quick stop)
-  const int64_t dir = up ? 1 : -1;
-  const int64_t plain = plain_levels();
+  if (!know_ramp()) return kUnpeeked;
+  const int64_t dir = ramp_known_.dir;
+  const int64_t plain = dir * (ramp_known_.last - level_);
   if (plain <= 0) return kUnpeeked;
   int64_t level = level_;
   Tick len = interval_end_ - t_, end = interval_end_;
@@ -26,7 +43,7 @@ namespace stepnode::motion {
   const IntervalGrid g = cursor_.grid();
   const double most = static_cast<double>(g.q + 1) * static_cast<double>(kWalked) *
                       static_cast<double>(level + kWalked);
-  if (cursor_.steep() || most < static_cast<double>(left - phase)) return peek_far(dir, plain);
+  if (ramp_known_.steep || most < static_cast<double>(left - phase)) return peek_far(dir, plain);
   // The walk with the cursor's additions (ramp_intervals.hpp) in registers: the interval
   // lengths are q or q + 1 (q >= 1 here), the phase of each its level times its length.
   int64_t rem = cursor_.remainder();
@@ -62,36 +79,24 @@ namespace stepnode::motion {
 [[gnu::aligned(64)]] Tick StepGenerator::peek_solved(int64_t left, int64_t phase) {
   // peek_beyond() for a step several levels on: the interval that holds it, solved inline
   // (ramp_step.hpp solve_to_step; anything else is peek_far()'s).
-  if (!solving_.valid) {
-    // The ramp's direction and last plain level, and that the cursor follows its Z (not
-    // a quick stop's mid-ramp change), once for the steps taken one after another.
-    const bool up = phase_ == MotionPhase::Accelerating;
-    const Rational z = up ? ramp_.accel_ticks_per_level : ramp_.decel_ticks_per_level;
-    if (!cursor_.at(z, interval_index_)) return kUnpeeked;
-    const int64_t dir = up ? 1 : -1;
-    solving_ = Solving{true, cursor_.steep(), dir, level_ + dir * plain_levels()};
-  }
-  const int64_t dir = solving_.dir;
-  const int64_t plain = dir * (solving_.last - level_);
+  if (!know_ramp()) return kUnpeeked;
+  const int64_t dir = ramp_known_.dir;
+  const int64_t plain = dir * (ramp_known_.last - level_);
   if (plain <= 0) return kUnpeeked;
   const IntervalGrid g = cursor_.grid();
   const int64_t after = left - phase;
   // Levels at one tick (Z < 1), or numbers beyond 64 bits: walk_to_step's.
-  if (solving_.steep || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
+  if (ramp_known_.steep || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
   RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
   if (!solve_to_step(w, g, cursor_.z(), dir, plain, after, last_span_)) return kUnpeeked;
-  last_span_ = w.passed;
-  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
-  return w.t + (w.left + w.level - 1) / w.level;
+  return step_found(w);
 }
 
 Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
   // peek_plain() for a step many levels on: the interval that holds it, solved.
   RampWalk w{t_, interval_end_, level_, ramp_.phase_per_step - acc_, 0, cursor_.remainder()};
   if (!walk_to_step(w, cursor_.grid(), dir, plain)) return kUnpeeked;
-  last_span_ = w.passed;
-  ahead_ = Ahead{true, w.t, ramp_.phase_per_step - w.left, w.level, w.passed, w.end, w.rem};
-  return w.t + (w.left + w.level - 1) / w.level;
+  return step_found(w);
 }
 
 }  // namespace stepnode::motion
