@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <ctime>
+#include <optional>
 #include <string>
 
+#include "canio/arrival_clock.hpp"
 #include "canio/event_loop.hpp"
 #include "canio/link_config.hpp"
 #include "canio/link_info.hpp"
@@ -41,19 +43,6 @@ std::vector<BusEvent> bus_events(const canio::ReceivedFrame& r) {
     if (s & CAN_ERR_CRTL_ACTIVE) out.push_back(BusEvent::ErrorActive);
   }
   return out;
-}
-
-// When the frame reached the socket, on CLOCK_MONOTONIC (`now`): the kernel stamps it on
-// CLOCK_REALTIME, so its age is measured on that clock. Without a usable stamp: now.
-uint64_t arrival_us(const canio::ReceivedFrame& r, uint64_t now) {
-  if (!r.kernel_time_ns) return now;
-  timespec real{};
-  clock_gettime(CLOCK_REALTIME, &real);
-  int64_t real_now_ns = static_cast<int64_t>(real.tv_sec) * 1'000'000'000 + real.tv_nsec;
-  int64_t age_us = (real_now_ns - static_cast<int64_t>(r.kernel_time_ns)) / 1000;
-  if (age_us < 0 || age_us > 100'000 || static_cast<uint64_t>(age_us) > now)
-    return now;  // clock stepped
-  return now - static_cast<uint64_t>(age_us);
 }
 
 // CiA 305's stored bit timing against the interface's bit rate. With --apply-bit-timing the
@@ -200,6 +189,8 @@ void NodeProcess::arm_for_next_deadline() {
 }
 
 void NodeProcess::on_readable() {
+  // The clocks tied once a batch, at its first stamped frame (canio/arrival_clock.hpp).
+  std::optional<int64_t> realtime_offset;
   while (auto r = can_.receive()) {
     uint64_t now = canio::EventLoop::now_us();
     if (r->error_frame) {
@@ -208,7 +199,9 @@ void NodeProcess::on_readable() {
       for (auto e : bus_events(*r)) set_.on_bus_event(e, now);
       continue;
     }
-    set_.on_frame(r->frame, now, arrival_us(*r, now));
+    if (r->kernel_time_ns && !realtime_offset) realtime_offset = canio::realtime_offset_ns();
+    set_.on_frame(r->frame, now,
+                  canio::arrival_us(r->kernel_time_ns, realtime_offset.value_or(0), now));
   }
   set_.on_receive_overruns(can_.receive_overruns(), canio::EventLoop::now_us());
   arm_for_next_deadline();  // a frame may have started a motion, a transfer, a timer
