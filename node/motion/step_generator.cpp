@@ -32,6 +32,7 @@ void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
   }
   if (scurve_) level_ = level();  // an S-curve's level is computed when read: kept here
   scurve_ = false;
+  s_peak_slope_ = 0;  // the S-curve's peak goes with its marks
   ramp_ = ramp;
   direction_ = direction >= 0 ? +1 : -1;
   distance_ = distance;

@@ -93,7 +93,12 @@ class StepGenerator {
     int64_t accel_steps = 0, run_steps = 0, decel_steps = 0, creep_steps = 0;
     int64_t peak_level = 0;
   };
-  const Marks& marks() const { return marks_; }
+  // An S-curve's peak is folded in when read: its steps keep only the highest slope.
+  Marks marks() const {
+    Marks m = marks_;
+    if (s_peak_slope_ > 0) m.peak_level = std::max(m.peak_level, s_level_of_slope(s_peak_slope_));
+    return m;
+  }
 
  private:
   void begin_decel();
@@ -145,13 +150,12 @@ class StepGenerator {
   void s_end_at_last_step();
   void s_follow();
   // The peak of the levels at every step, without the level of each: level_of(), the
-  // conversions and the scale all rise with the slope, so a slope up to the highest one
-  // counted so far cannot raise the peak (not holding the target: the level is the slope's).
-  void s_track_peak() {
-    if (const __int128 slope = s_.p->slope(); slope > s_peak_slope_) s_raise_peak(slope);
-  }
-  void s_raise_peak(__int128 slope);
+  // conversions and the scale all rise with the slope, so the peak is the highest slope's
+  // level (not holding the target: the level is the slope's), found when marks() is read.
+  void s_track_peak() { s_peak_slope_ = std::max(s_peak_slope_, s_.p->slope()); }
   int64_t s_level() const;
+  int64_t s_level_of_slope(__int128 slope) const;
+  void s_fold_peak();
   void leave_s_curve(Tick at);
   JerkLimits jerk_limits(const RampSpec& ramp) const;
   double slope_of(Rational z) const;
@@ -231,8 +235,8 @@ class StepGenerator {
   // is not kept); leave_s_curve() writes it into level_.
   bool s_level_lazy_ = false;
   bool s_at_target_ = false;  // it holds its target velocity: the level is the target's
-  // The highest slope whose level marks_.peak_level counts (a step at a slope up to this
-  // one cannot raise the peak: the level rises with the slope).
+  // The highest slope at a step of the running S-curve, whose level marks() counts in the
+  // peak (0: none; leave_s_curve() folds it into marks_).
   __int128 s_peak_slope_ = 0;
 };
 

@@ -83,9 +83,9 @@ void StepGenerator::s_follow() {
   }
 }
 
-void StepGenerator::s_raise_peak(__int128 slope) {
-  s_peak_slope_ = slope;
-  marks_.peak_level = std::max(marks_.peak_level, s_level());
+void StepGenerator::s_fold_peak() {
+  marks_.peak_level = marks().peak_level;
+  s_peak_slope_ = 0;
 }
 
 int64_t StepGenerator::s_level() const {
@@ -93,9 +93,15 @@ int64_t StepGenerator::s_level() const {
   // millionths); otherwise the velocity at the last step. The S-curve's state is the one
   // the last step or change left (peek() does not move it).
   const SCurve& s = *s_.p;
+  if (!s.at_target_velocity()) return s_level_of_slope(s.slope());
   const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
-  const double v = s.at_target_velocity() ? s.target_velocity() : s.velocity();
-  return level_of(v * lph);
+  return level_of(s.target_velocity() * lph);
+}
+
+int64_t StepGenerator::s_level_of_slope(__int128 slope) const {
+  // The level of the velocity at S dp/dtau = slope, as SCurve::velocity() converts it.
+  const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
+  return level_of(scurve::to_double(slope) / scurve::kV * lph);
 }
 
 bool StepGenerator::s_take_known(Step& out) {
@@ -159,6 +165,7 @@ void StepGenerator::leave_s_curve(Tick at) {
   // A cyclic mode takes over a jerk-limited motion: the trapezoid's state at its velocity,
   // the phase accumulator empty (at most a fraction of a step late).
   if (!scurve_) return;
+  s_fold_peak();  // the trapezoid's grid from here on may differ
   level_ = std::max<int64_t>(level(), 1);
   s_level_lazy_ = false;
   scurve_ = false;
