@@ -30,7 +30,6 @@ namespace stepnode::motion {
 // On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
 [[gnu::aligned(64)]] Tick StepGenerator::peek_beyond(int64_t left, int64_t phase) {
   // The rest of peek_plain(): the step lies beyond this interval (`phase` < `left`).
-  const int64_t d = ramp_.phase_per_step;
   if (!know_ramp()) return kUnpeeked;
   const int64_t dir = ramp_known_.dir;
   const int64_t plain = dir * (ramp_known_.last - level_);
@@ -69,10 +68,7 @@ namespace stepnode::motion {
     } while (phase < left);
   }
   // next() goes on from there.
-  const Tick t = end - len;
-  last_span_ = (level - level_) * dir;
-  ahead_ = Ahead{true, t, d - left, level, last_span_, end, rem};
-  return t + (left + level - 1) / level;
+  return step_found(RampWalk{end - len, end, level, left, (level - level_) * dir, rem});
 }
 
 // On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
