@@ -69,7 +69,9 @@ class SCurve {
   std::optional<int64_t> distance() const { return distance_; }
   // At the last step (or change): the velocity in steps/s and what the motion does. The
   // velocity is the exact slope's (slope()), converted only when read.
-  double velocity() const { return scurve::to_double(slope()) / scurve::kV; }
+  double velocity() const { return velocity_of(slope()); }
+  // The velocity in steps/s at S dp/dtau = `slope`.
+  static double velocity_of(__int128 slope) { return scurve::to_double(slope) / scurve::kV; }
   // S dp/dtau at the last step: 6 T^2 steps/s, 0 before the first step and after the end.
   __int128 slope() const { return still_ ? 0 : local_[cur_].b1; }
   // Right after next_step(): that step was the quick search's (in the last step's segment).

@@ -96,7 +96,8 @@ class StepGenerator {
   // An S-curve's peak is folded in when read: its steps keep only the highest slope.
   Marks marks() const {
     Marks m = marks_;
-    if (s_peak_slope_ > 0) m.peak_level = std::max(m.peak_level, s_level_of_slope(s_peak_slope_));
+    if (s_peak_slope_ > 0)
+      m.peak_level = std::max(m.peak_level, s_level_at(SCurve::velocity_of(s_peak_slope_)));
     return m;
   }
 
@@ -154,7 +155,7 @@ class StepGenerator {
   // level (not holding the target: the level is the slope's), found when marks() is read.
   void s_track_peak() { s_peak_slope_ = std::max(s_peak_slope_, s_.p->slope()); }
   int64_t s_level() const;
-  int64_t s_level_of_slope(__int128 slope) const;
+  int64_t s_level_at(double velocity) const;
   void s_fold_peak();
   void leave_s_curve(Tick at);
   JerkLimits jerk_limits(const RampSpec& ramp) const;

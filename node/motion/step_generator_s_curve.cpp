@@ -93,15 +93,12 @@ int64_t StepGenerator::s_level() const {
   // millionths); otherwise the velocity at the last step. The S-curve's state is the one
   // the last step or change left (peek() does not move it).
   const SCurve& s = *s_.p;
-  if (!s.at_target_velocity()) return s_level_of_slope(s.slope());
-  const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
-  return level_of(s.target_velocity() * lph);
+  return s_level_at(s.at_target_velocity() ? s.target_velocity() : s.velocity());
 }
 
-int64_t StepGenerator::s_level_of_slope(__int128 slope) const {
-  // The level of the velocity at S dp/dtau = slope, as SCurve::velocity() converts it.
+int64_t StepGenerator::s_level_at(double velocity) const {
   const double lph = static_cast<double>(ramp_.phase_per_step) / static_cast<double>(kClockHz);
-  return level_of(scurve::to_double(slope) / scurve::kV * lph);
+  return level_of(velocity * lph);
 }
 
 bool StepGenerator::s_take_known(Step& out) {
