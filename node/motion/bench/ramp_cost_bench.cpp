@@ -20,7 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "node/motion/hp_profile.hpp"
+#include "node/motion/bench/bench_ramps.hpp"
 #include "node/motion/ramp.hpp"
 #include "node/motion/step_generator.hpp"
 
@@ -37,17 +37,15 @@ bool kind_of(const char* name, Kind& k) {
   if (std::strcmp(name, "horner") == 0) {
     k = {horner_ramp(20, 1, 8191, 100, 0), 40'000};
   } else if (std::strcmp(name, "hp") == 0) {
-    hp::Profile p;
-    p.min = 0, p.max = 10'000, p.slope = 100'000, p.last = 50e-6;
-    k = {hp::freq_ramp(p, p.max), 20'000};
+    k = {bench::hp_ramp(), 20'000};
   } else if (std::strcmp(name, "cia402") == 0 || std::strcmp(name, "scurve") == 0) {
-    k = {profile_ramp(10'000, 100'000, 100'000, profile_levels_per_hz(100'000)), 20'000};
+    k = {bench::cia402_ramp(), 20'000};
     if (name[0] == 's') {
       k.ramp.s_curve = true;
       for (uint32_t& j : k.ramp.jerk) j = 1'000'000;
     }
   } else if (std::strcmp(name, "slow") == 0) {
-    k = {profile_ramp(1'000, 1'000, 1'000, profile_levels_per_hz(1'000)), 2'000};
+    k = {bench::slow_ramp(), 2'000};
   } else if (std::strcmp(name, "steep") == 0) {
     const int64_t a = 10'000'000;
     k = {profile_ramp(10'000, a, a, profile_levels_per_hz(a)), 4'000};

@@ -12,7 +12,7 @@
 #include <cstring>
 #include <vector>
 
-#include "node/motion/hp_profile.hpp"
+#include "node/motion/bench/bench_ramps.hpp"
 #include "node/motion/ramp.hpp"
 #include "node/motion/ramp_intervals.hpp"
 #include "node/motion/ramp_step.hpp"
@@ -22,17 +22,14 @@ namespace {
 
 using namespace stepnode::motion;
 
-// The ramps of ramp_cost_bench (node/motion/bench/ramp_cost_bench.cpp): to their run
-// level from rest.
+// The ramps of ramp_cost_bench: to their run level from rest.
 bool ramp_of(const char* name, RampSpec& r) {
   if (std::strcmp(name, "hp") == 0) {
-    hp::Profile p;
-    p.min = 0, p.max = 10'000, p.slope = 100'000, p.last = 50e-6;
-    r = hp::freq_ramp(p, p.max);
+    r = bench::hp_ramp();
   } else if (std::strcmp(name, "cia402") == 0) {
-    r = profile_ramp(10'000, 100'000, 100'000, profile_levels_per_hz(100'000));
+    r = bench::cia402_ramp();
   } else if (std::strcmp(name, "slow") == 0) {
-    r = profile_ramp(1'000, 1'000, 1'000, profile_levels_per_hz(1'000));
+    r = bench::slow_ramp();
   } else {
     return false;
   }
