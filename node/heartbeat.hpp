@@ -21,8 +21,9 @@ class HeartbeatProducer {
   // Sends the heartbeat now (state changes are confirmed at once) and restarts the period.
   void send_now(NmtState state, uint64_t now_us);
   void on_tick(NmtState state, uint64_t now_us);
-  // When on_tick sends the next heartbeat: the last one + 0x1017 ms (CiA 301 7.2.8.3.2.2);
-  // kNoDeadline while 0x1017 is 0.
+  // When on_tick sends the next heartbeat: the last one + 0x1017 ms (CiA 301 7.2.8.3.2.2),
+  // counted from when the last was due if it went out at most 0x1017 / 10 late (the cycle
+  // kept), else from when it went out; kNoDeadline while 0x1017 is 0.
   uint64_t next_deadline_us() const;
   // A node-ID configured over LSS, in effect from the reset communication that applies it.
   void set_node_id(uint8_t node_id) { node_id_ = node_id; }
@@ -30,8 +31,10 @@ class HeartbeatProducer {
  private:
   od::Dictionary& dictionary_;
   uint8_t node_id_;
+  // A heartbeat late by at most 0x1017 / this keeps the cycle; a later one restarts it.
+  static constexpr uint64_t kKeptLatenessDivisor = 10;
   Send send_;
-  uint64_t last_sent_us_ = 0;
+  uint64_t last_sent_us_ = 0;  // when the last heartbeat went out, or was due (cycle kept)
 };
 
 // Watches the nodes listed in 0x1016. Monitoring of a node starts with its first
