@@ -270,7 +270,12 @@ void PdoEngine::on_tick(uint64_t now_us) {
     for (size_t i = 0; !changed && i < data.size(); ++i)
       changed = ((data[i] ^ t.last_data[i]) & t.event_mask[i]) != 0;
     bool timer = t.event_us && now_us - t.last_sent_us >= t.event_us;
-    if (!(changed || timer || t.send_request)) continue;
+    if (!(changed || timer || t.send_request)) {
+      // A change undone within the inhibit time leaves nothing to send after it: no longer
+      // held (kept, its deadline stayed at now after the inhibit time, a busy loop).
+      t.held = false;
+      continue;
+    }
     if (t.sent_any && now_us - t.last_sent_us < t.inhibit_us) {
       t.held = true;  // retried once the inhibit time has passed (next_deadline_us)
       continue;

@@ -73,6 +73,42 @@ TEST_F(DeadlineTest, TpdoEventTimerAndInhibitTime) {
   EXPECT_EQ(times_of(0x180 + kId), std::vector<uint64_t>{sent + 50'000});
 }
 
+TEST_F(DeadlineTest, TpdoChangeHeldByTheInhibitTimeGoesOutAtItsEnd) {
+  ASSERT_EQ(sdo_write(0x1017, 0, 0, 2), 0u);
+  nmt(0x01);
+  map_tpdo(0, {0x10010008}, 254, 1000, 0);  // 0x1001 on change, inhibit 100 ms, no event timer
+  device->on_tick(t);
+  const uint64_t first = times_of(0x180 + kId).back();
+  t = first + 10'000;
+  node->emcy().raise(0xFF01, 0x80, {}, t);
+  device->on_tick(t);
+  EXPECT_EQ(deadline(), first + 100'000) << "the change waits for the inhibit time";
+  clear_sent();
+  run_event_driven(first + 200'000);
+  EXPECT_EQ(times_of(0x180 + kId), std::vector<uint64_t>{first + 100'000});
+  EXPECT_EQ(deadline(), kNoDeadline);
+}
+
+TEST_F(DeadlineTest, TpdoChangeUndoneWithinTheInhibitTimeLeavesNothingTimed) {
+  // Found in review: the change stayed held, its deadline max(now, inhibit end) = now for
+  // ever after the inhibit time, and the loop woke at once on every turn.
+  ASSERT_EQ(sdo_write(0x1017, 0, 0, 2), 0u);
+  nmt(0x01);
+  map_tpdo(0, {0x10010008}, 254, 1000, 0);
+  device->on_tick(t);
+  const uint64_t first = times_of(0x180 + kId).back();
+  t = first + 10'000;
+  node->emcy().raise(0xFF01, 0x80, {}, t);  // 0x1001 changes: held
+  device->on_tick(t);
+  t = first + 20'000;
+  node->emcy().clear(0xFF01, t);  // and back to what was sent
+  device->on_tick(t);
+  EXPECT_EQ(deadline(), kNoDeadline) << "nothing is held any more";
+  clear_sent();
+  run_event_driven(first + 300'000);  // fails its own check if a deadline stays at now
+  EXPECT_TRUE(times_of(0x180 + kId).empty()) << "the value last sent is still the value";
+}
+
 TEST_F(DeadlineTest, RpdoDeadlineIsLastFramePlusEventTime) {
   nmt(0x01);
   map_rpdo(0, {0x20000010}, 255, 20);  // RPDO 1: the Horner command word of axis 1, 20 ms
