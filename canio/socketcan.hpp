@@ -59,7 +59,11 @@ class SocketCan {
   // net.core.rmem_max), else SO_RCVBUF (capped by the kernel at rmem_max). Never fails: the
   // queue keeps what the kernel granted. Returns the size the socket has now, as the kernel
   // counts it (getsockopt SO_RCVBUF: about twice what was asked, its overhead included).
+  // Asks nothing where the socket already has that much: it never shrinks the queue.
   size_t request_receive_buffer(size_t bytes);
+  // The receive queue's size as the kernel counts it (getsockopt SO_RCVBUF; a new socket's
+  // is net.core.rmem_default), 0 if it cannot be read.
+  size_t receive_buffer() const;
 
   // Reads one frame if one is waiting.
   std::optional<ReceivedFrame> receive();

@@ -22,11 +22,6 @@
 namespace stepnode::node {
 namespace {
 
-// With many nodes behind one socket a burst for all of them (a master's SDO round, NMT,
-// SYNC answers it provokes elsewhere) must queue, not overflow: a receive queue per node
-// of this much. One node keeps the kernel's default, as before issue 13.
-constexpr size_t kReceiveBufferPerNode = size_t{8} * 1024;
-
 // SocketCAN error frames in CANopen terms (linux/can/error.h).
 std::vector<BusEvent> bus_events(const canio::ReceivedFrame& r) {
   std::vector<BusEvent> out;
@@ -93,10 +88,15 @@ class NodeProcess {
         bit_timing_([this](uint32_t rate) { return canio::set_can_bit_rate(cfg_.iface, rate); }),
         set_(
             options_per_node(with_process_hooks(cfg.options), cfg.node_ids), cfg.object_defaults,
-            [this](const od::CanFrame& f) { send(f); }, cfg.tick_us) {
+            [this](const od::CanFrame& f) { return send(f); }, cfg.tick_us) {
     filter_socket();
+    // With many nodes behind one socket a burst for all of them (a master's SDO round, NMT,
+    // the answers it provokes) must queue as it would in their separate processes' sockets.
+    // One node keeps the kernel's default. (Before, 8 KiB per node replaced the default,
+    // so 2 to 12 nodes had less than one alone: found in review.)
     if (set_.size() > 1) {
-      const size_t granted = can_.request_receive_buffer(set_.size() * kReceiveBufferPerNode);
+      const size_t granted =
+          can_.request_receive_buffer(receive_buffer_request(set_.size(), can_.receive_buffer()));
       spdlog::info("{}: receive buffer {} bytes for {} nodes", cfg.iface, granted, set_.size());
     }
   }
@@ -114,11 +114,15 @@ class NodeProcess {
       };
     return o;
   }
-  // Every frame of every node; none while a bit timing switch keeps the node silent.
-  void send(const od::CanFrame& f) {
-    if (bit_timing_.active() && bit_timing_.silent(canio::EventLoop::now_us()))
+  // Every frame of every node; none while a bit timing switch keeps the node silent (false:
+  // the other nodes of the process do not hear it either).
+  bool send(const od::CanFrame& f) {
+    if (bit_timing_.active() && bit_timing_.silent(canio::EventLoop::now_us())) {
       bit_timing_.dropped_one();
-    else can_.send(f);
+      return false;
+    }
+    can_.send(f);
+    return true;
   }
   void filter_socket();
   void tell_ready_once_sent();

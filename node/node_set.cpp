@@ -21,8 +21,9 @@ NodeSet::NodeSet(const std::vector<NodeOptions>& options, const Device::ObjectDe
 NodeSet::~NodeSet() = default;
 
 void NodeSet::sent(size_t sender, const od::CanFrame& frame) {
-  to_bus_(frame);
-  if (devices_.size() > 1) sent_.push_back({frame, sender});
+  // Dropped before the bus (found in review: a node watching another's heartbeat kept
+  // hearing it through a bit timing switch's quiet time, when separate processes hear none).
+  if (to_bus_(frame) && devices_.size() > 1) sent_.push_back({frame, sender});
 }
 
 void NodeSet::start(uint64_t now_us) {

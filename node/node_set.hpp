@@ -22,9 +22,18 @@
 
 namespace stepnode::node {
 
+// The receive queue to ask for `nodes` nodes behind one socket, given `one_socket`, the size a
+// socket has by default as the kernel counts it (twice what is asked): the queues of that
+// many separate processes together, so a burst one process alone would hold is held here.
+inline size_t receive_buffer_request(size_t nodes, size_t one_socket) {
+  return nodes * (one_socket / 2);
+}
+
 class NodeSet {
  public:
-  using Send = std::function<void(const od::CanFrame&)>;
+  // Hands a frame to the bus; false where the process dropped it instead (a bit timing
+  // switch's quiet time): the other nodes of the set hear only what goes to the bus.
+  using Send = std::function<bool(const od::CanFrame&)>;
   // One Device per options entry (node/node_id_list.hpp makes them). Every node is ticked
   // at least every `max_sleep_us` (--tick-us), as one node alone was.
   NodeSet(const std::vector<NodeOptions>& options, const Device::ObjectDefaults& defaults,

@@ -130,8 +130,10 @@ void start_all(node::NodeSet& set, const Args& a, uint64_t now, HeartbeatLog& lo
 // Real clock: the event loop of node/node_process.cpp without the socket.
 void run_real(const Args& a, const std::filesystem::path& dir) {
   HeartbeatLog log;
-  node::NodeSet set(options(a, dir), defaults(a),
-                    [&log](const od::CanFrame& f) { log.record(f, canio::EventLoop::now_us()); });
+  node::NodeSet set(options(a, dir), defaults(a), [&log](const od::CanFrame& f) {
+    log.record(f, canio::EventLoop::now_us());
+    return true;
+  });
   canio::EventLoop loop;
   int timer = -1;
   const uint64_t begin = canio::EventLoop::now_us();
@@ -174,7 +176,10 @@ void run_real(const Args& a, const std::filesystem::path& dir) {
 void run_virtual(const Args& a, const std::filesystem::path& dir) {
   HeartbeatLog log;
   uint64_t t = 1'000'000;
-  node::NodeSet set(options(a, dir), defaults(a), [&](const od::CanFrame& f) { log.record(f, t); });
+  node::NodeSet set(options(a, dir), defaults(a), [&](const od::CanFrame& f) {
+    log.record(f, t);
+    return true;
+  });
   start_all(set, a, t, log);
   const uint64_t end = t + static_cast<uint64_t>(a.seconds * 1e6);
   uint64_t wakeups = 0;

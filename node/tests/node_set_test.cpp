@@ -27,7 +27,11 @@ class NodeSetTest : public ::testing::Test {
     base.device.serial_number = 1000;
     set.reset();
     set = std::make_unique<NodeSet>(options_per_node(base, ids), defaults,
-                                    [this](const od::CanFrame& f) { bus.push_back(f); });
+                                    [this](const od::CanFrame& f) {
+                                      if (dropping) return false;
+                                      bus.push_back(f);
+                                      return true;
+                                    });
     bus.clear();
     set->start(t);
   }
@@ -74,6 +78,7 @@ class NodeSetTest : public ::testing::Test {
   TempDir dir;
   uint64_t t = 1'000'000;
   std::vector<od::CanFrame> bus;
+  bool dropping = false;  // the process drops every frame (a bit timing switch's quiet time)
   std::unique_ptr<NodeSet> set;
 };
 
@@ -232,6 +237,31 @@ TEST_F(NodeSetTest, AboveTheKernelLimitEveryFrameComesAndIsRoutedInSoftware) {
   ASSERT_EQ(bus.size(), 1u);
   EXPECT_EQ(bus[0].id, 0x580u + 100);
   EXPECT_EQ(set->device(99).dictionary().get<uint16_t>(0x1017, 0), 50);
+}
+
+TEST_F(NodeSetTest, AFrameDroppedBeforeTheBusIsNotHeardByTheOtherNodes) {
+  // Found in review: node 2 kept hearing node 1's heartbeat while the process sent nothing,
+  // where separate processes on the bus hear none and node 2's consumer times out.
+  make({1, 2});
+  sdo_write_u16(1, 0x1017, 0, 100);
+  sdo_write_u32(2, 0x1016, 1, (1u << 16) | 300);  // node 2 watches node 1, 300 ms
+  advance_ms(1000);
+  const uint64_t heard = set->local_deliveries();
+  ASSERT_GT(heard, 0u);
+  dropping = true;
+  advance_ms(2000);
+  dropping = false;
+  EXPECT_EQ(set->local_deliveries(), heard) << "nothing reached the bus, nothing is heard";
+  EXPECT_TRUE(set->device(1).canopen().emcy().active(0x8130)) << "node 2 lost node 1";
+}
+
+TEST(ReceiveBufferRequest, NodesGetTheirSeparateProcessesQueuesTogether) {
+  // Found in review: 8 KiB per node replaced the default, so 2 to 12 nodes had less than one.
+  // The kernel counts twice what is asked; a socket's default is rmem_default (212,992).
+  const size_t one = 212'992;
+  EXPECT_EQ(2 * receive_buffer_request(1, one), one);
+  EXPECT_EQ(2 * receive_buffer_request(2, one), 2 * one);
+  EXPECT_EQ(2 * receive_buffer_request(127, one), 127 * one);
 }
 
 }  // namespace
