@@ -63,6 +63,7 @@ SdoAbort BlockReceiver::on_segment(const CanFrame& frame, uint32_t ack_cob_id, u
   activity_ = true;
   last_rx_us_ = now_us;
   if (seqno == last_good_ + 1) {
+    if (seqno == 1) gap_acked_ = false;  // a sub-block begins (again)
     if (data_.size() + kSegmentBytes > limit_) return overflow_abort_;
     data_.insert(data_.end(), frame.data.begin() + 1, frame.data.end());
     last_good_ = seqno;
@@ -73,7 +74,14 @@ SdoAbort BlockReceiver::on_segment(const CanFrame& frame, uint32_t ack_cob_id, u
       ack(ack_cob_id, out);
     }
   } else if (last_good_ != 0 && seqno > last_good_ + 1) {
+    gap_acked_ = true;
     ack(ack_cob_id, out);  // gap: confirm what arrived, the sender repeats the rest
+  } else if (last_good_ == 0 && !gap_acked_ && (seqno == blksize_ || last)) {
+    // The sub-block's end with its first segment lost: ackseq 0, the sender repeats the
+    // whole sub-block (7.2.4.3.10). Before, only the stall timer answered, after half the
+    // SDO timeout, later than clients wait (python-canopen 0.3 s): found in review.
+    gap_acked_ = true;
+    ack(ack_cob_id, out);
   }
   // Otherwise a duplicate, or a leftover of a sub-block already acknowledged: ignore.
   return SdoAbort::None;

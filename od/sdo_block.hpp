@@ -82,6 +82,8 @@ class BlockReceiver {
   bool got_last_ = false;
   bool finished_ = false;
   bool activity_ = false;  // segments arrived since the last ack
+  // This sub-block was acknowledged before its end (a gap): its leftovers ask nothing.
+  bool gap_acked_ = false;
   uint64_t last_rx_us_ = 0;
 };
 

@@ -119,8 +119,14 @@ std::optional<uint64_t> SdoServer::next_deadline_us() const {
 
 void SdoServer::State::request(const CanFrame& req, uint64_t now_us, std::vector<CanFrame>& out) {
   if (req.rtr) return;  // SDOs are never remote frames (7.2.4.3.1): nothing to answer
-  if (req.dlc >= 1 && req.data[0] == kAbortByte) {
-    end();  // 7.2.4.3.17: the transfer ends, an abort is not confirmed
+  // 7.2.4.3.17: ccs 4 is an abort whatever its unused bits 4..0 (answering one with an
+  // abort: found in review); the transfer ends, an abort is not confirmed. In a block
+  // download's sub-block byte 0 is c | seqno, so there only 0x80 (seqno 0) is the abort.
+  const bool abort =
+      req.dlc >= 1 && (req.data[0] == kAbortByte ||
+                       (t.phase != Phase::BlockDownloadSub && command(req.data[0]) == ccs::kAbort));
+  if (abort) {
+    end();
     return;
   }
   if (req.dlc < 8) return reject(req, SdoAbort::BadCommand, out);
