@@ -212,7 +212,10 @@ void CanopenNode::initialise(bool reset_application, uint64_t now_us) {
   emcy_.set_enabled(false);  // nothing but the boot-up message before pre-operational
   pdo_.reset();
   sdo_.reset();
-  // A node-ID configured over LSS takes effect here, at reset communication (CiA 305).
+  // A node-ID configured over LSS takes effect here, at reset communication (CiA 305), and
+  // the LSS slave is back in waiting: left in configuration state, a booted node answered
+  // the master's next configure node-ID meant for the next device (found in review).
+  lss_.enter_waiting();
   if (const uint8_t id = lss_.activate_pending_node_id(); id != node_id()) adopt_node_id(id);
   if (!configured()) {
     // CiA 305: without a node-ID the device stays in NMT initialisation, silent but for

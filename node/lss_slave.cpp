@@ -48,6 +48,11 @@ od::CanFrame LssSlave::answer_u32(uint8_t command, uint32_t value) {
   return f;
 }
 
+void LssSlave::enter_waiting() {
+  state_ = lss::State::Waiting;
+  selective_next_ = identify_next_ = fast_scan_position_ = 0;
+}
+
 uint8_t LssSlave::activate_pending_node_id() {
   active_node_id_ = pending_node_id_;
   return active_node_id_;

@@ -100,6 +100,10 @@ class LssSlave {
   // NMT reset communication: the pending node-ID becomes the active one (CiA 305 V3.0,
   // "configure node-ID"). Returns it.
   uint8_t activate_pending_node_id();
+  // NMT reset communication or reset node (and power-on): back to LSS waiting, any
+  // selective, identify or fast scan sequence forgotten (CiA 305's automatic transition
+  // into waiting after initialisation, as CANopenNode does at every communication reset).
+  void enter_waiting();
   // Another device has the node-ID (node/node_id_conflict.hpp): none, active or pending,
   // so the next reset communication leaves the device waiting for a master.
   void give_up_node_id() { active_node_id_ = pending_node_id_ = lss::kUnconfigured; }

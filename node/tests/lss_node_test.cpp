@@ -87,6 +87,21 @@ TEST_F(LssNodeTest, NmtResetCommunicationAlsoAppliesTheConfiguredNodeId) {
   EXPECT_EQ(sent.front(), CanFrame(0x721, {0x00}));
 }
 
+TEST_F(LssNodeTest, NmtResetCommunicationReturnsTheLssSlaveToWaiting) {
+  // CiA 305: after initialisation the LSS slave is in waiting. Found in review: it stayed in
+  // configuration state and took the node-ID the master meant for the next device.
+  frame(lss({0x04, 0x01}));
+  frame(lss({0x11, 0x21}));
+  nmt(0x82, 0);
+  ASSERT_EQ(node->node_id(), 0x21);
+  clear_sent();
+  frame(lss({0x5E}));        // inquire node-ID: configuration state only
+  frame(lss({0x11, 0x22}));  // configure node-ID: configuration state only
+  EXPECT_TRUE(with_id(kLssTx).empty());
+  EXPECT_EQ(node->lss().state(), lss::State::Waiting);
+  EXPECT_EQ(node->lss().pending_node_id(), 0x21);
+}
+
 TEST_F(LssNodeTest, StoredNodeIdIsUsedAtTheNextStart) {
   frame(lss({0x04, 0x01}));
   frame(lss({0x11, 0x2A}));
@@ -136,6 +151,12 @@ TEST_F(LssNodeTest, AConfiguredNodeTakesANewNodeIdAtResetCommunication) {
   frame(CanFrame(0x606, {0x40, 0x18, 0x10, 0x04, 0, 0, 0, 0}));
   EXPECT_EQ(with_id(0x586).size(), 1u);
   EXPECT_TRUE(with_id(0x585).empty());
+  // Selected before the reset, waiting after it: a second configure is not this node's.
+  EXPECT_EQ(node->lss().state(), lss::State::Waiting);
+  clear_sent();
+  frame(lss({0x11, 0x07}));
+  EXPECT_TRUE(with_id(kLssTx).empty());
+  EXPECT_EQ(node->lss().pending_node_id(), 6);
 }
 
 TEST_F(LssNodeTest, ARunningNodeConfiguredToNoNodeIdFallsSilentAndItsAxesRampDown) {
