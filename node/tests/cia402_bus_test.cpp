@@ -153,5 +153,33 @@ TEST_F(Cia402Bus, ALostMasterIsAFaultWithEmcy8130By6007) {
   EXPECT_EQ(*sdo_read(0x603F, 0), 0u);
 }
 
+TEST_F(Cia402Bus, ModeAndHomingStartInOneRpdoStartHoming) {
+  // RPDO1 {6040h, 6060h}: the mode is taken before the controlword's bits are read (the
+  // controlword came first, in mapping order: bit 4 started a PP move to 607Ah instead of
+  // the homing, and its edge was used up; found in review).
+  ASSERT_EQ(sdo_write(0x6098, 0, 35, 1), 0u);  // homing on the current position
+  rpdo1(0x06, 1);
+  rpdo1(0x07, 1);
+  rpdo1(0x0F, 1);
+  rpdo2(1000, 0);
+  rpdo1(0x1F, 6);  // homing mode and homing operation start
+  advance_ms(1000);
+  EXPECT_EQ(sdo_read(0x6061, 0), 6u);
+  EXPECT_EQ(sdo_read(0x6064, 0), 0u) << "no PP move to 1000";
+  EXPECT_EQ(*sdo_read(0x6041, 0) & 0x3400u, 0x1400u) << "13/12/10 = 0/1/1: homing attained";
+}
+
+TEST_F(Cia402Bus, AModeByteOfZeroKeepsTheMode) {
+  rpdo1(0x06, 3);
+  rpdo1(0x07, 3);
+  rpdo1(0x0F, 3);
+  rpdo2(0, 500);
+  advance_ms(500);
+  rpdo1(0x0F, 0);  // 6060h 0: no mode change
+  advance_ms(500);
+  EXPECT_EQ(sdo_read(0x6061, 0), 3u);
+  EXPECT_NE(sdo_read(0x606C, 0), 0u) << "still moving at the target velocity";
+}
+
 }  // namespace
 }  // namespace stepnode::node::test

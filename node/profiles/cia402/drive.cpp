@@ -20,14 +20,14 @@ constexpr uint16_t kExternalError = 0x9000;   // the e-stop input
 
 Drive::Drive(motion::AxisCore& core) : core_(core) {
   core_.listen(*this, this);
-  power_up(0);
+  power_up(0, Mode::ProfilePosition);
 }
 
-void Drive::power_up(Tick now) {
+void Drive::power_up(Tick now, Mode mode) {
   (void)now;
   machine_.power_on();  // transitions 0 and 1
   controlword_ = 0;
-  mode_display_ = mode_;
+  mode_ = mode_display_ = mode;  // 6060h as it is at power-up (0: no mode assigned)
   active_.reset();
   next_.reset();
   last_target_.reset();
@@ -99,6 +99,11 @@ void Drive::controlword(uint16_t cw, Tick now) {
     if (mode_display_ == Mode::Homing && !halted_ && (cw & kHomingOperationStart) &&
         !(previous & kHomingOperationStart))
       start_homing(now);
+    // HM bit 4: "1 = start or continue homing"; taken back while homing runs, the homing
+    // is interrupted (status 0/0/1 once stopped; it ran on to its end: found in review).
+    if (mode_display_ == Mode::Homing && homing_ == Homing::InProgress &&
+        !(cw & kHomingOperationStart) && (previous & kHomingOperationStart))
+      interrupt_homing(now);
     if (mode_display_ == Mode::ProfilePosition && !halted_ && (cw & cw_pp::kNewSetPoint) &&
         !(previous & cw_pp::kNewSetPoint))
       new_set_point(cw, now);
@@ -113,6 +118,10 @@ void Drive::controlword(uint16_t cw, Tick now) {
 }
 
 void Drive::set_mode(Mode mode, Tick now) {
+  // 6060h 0: "no mode change / no mode assigned". A master that maps 6060h beside 6040h
+  // and leaves it 0 keeps the mode it chose (0 stopped the motion and showed mode 0: found
+  // in review); before any mode was chosen it is the mode assigned, none.
+  if (mode == Mode::None && mode_ != Mode::None) return;
   core_.advance_to(now);
   const bool changed = mode != mode_;
   mode_ = mode;
@@ -140,12 +149,19 @@ void Drive::set_mode(Mode mode, Tick now) {
 
 void Drive::halt(bool on, Tick now) {
   halted_ = on;
-  if (!on || !core_.owned_by(*this)) return;
+  if (!on) return resume_after_halt(now);
+  if (!core_.owned_by(*this)) return;
   if (homing_ == Homing::InProgress) homing_ = Homing::Idle;  // interrupted
-  // 605Dh: the motion stops and the drive stays in Operation enabled; a PP set-point is
-  // given up (a new one is needed after the halt), PV resumes its target when released.
-  active_.reset();
-  next_.reset();
+  // 605Dh: the motion stops and the drive stays in Operation enabled. PP keeps its
+  // set-points: bit 8 = 0 "positioning shall be executed or continued" (they were given
+  // up, and target reached then showed 1 short of the target: found in review); the next
+  // one no longer runs on through the first target. PV resumes its target when released.
+  if (mode_display_ == Mode::ProfilePosition) {
+    if (next_) next_->through = false;
+  } else {
+    active_.reset();
+    next_.reset();
+  }
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
   switch (machine_.halt_stop()) {
@@ -154,6 +170,20 @@ void Drive::halt(bool on, Tick now) {
     case Stop::DisableDrive: core_.halt(*this, now); break;
     default: core_.stop(now); break;
   }
+}
+
+void Drive::resume_after_halt(Tick now) {
+  // PP: the set-point the halt stopped goes on from where the axis is (once the halt's
+  // ramp has ended, if it still runs).
+  if (mode_display_ != Mode::ProfilePosition || !active_) return;
+  if (core_.owned_by(*this)) restart_after_stop_ = true;
+  else start_positioning(*active_, now);
+}
+
+void Drive::interrupt_homing(Tick now) {
+  homing_ = Homing::Idle;
+  search_stopping_ = false;
+  if (core_.owned_by(*this)) core_.stop(now);
 }
 
 // ---- the core's events ----------------------------------------------------------------
@@ -197,6 +227,8 @@ void Drive::motion_ended(Tick when) {
     restart_after_stop_ = false;
     return start_positioning(*active_, when);
   }
+  if (halted_ && mode_display_ == Mode::ProfilePosition && active_ && mode_ == mode_display_)
+    return;  // stopped by the halt: its set-points wait for the release
   if (velocity_after_stop_) {
     const int64_t v = *velocity_after_stop_;
     velocity_after_stop_.reset();

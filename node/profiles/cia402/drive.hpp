@@ -93,7 +93,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   Drive& operator=(const Drive&) = delete;
 
   // Power-up / NMT reset node: transitions 0 and 1, no set-point, mode as configured.
-  void power_up(motion::Tick now);
+  void power_up(motion::Tick now, Mode mode);
 
   // ---- what the master writes
   void controlword(uint16_t cw, motion::Tick now);                       // 6040h
@@ -126,6 +126,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // ---- what the master reads
   uint16_t statusword() const;                         // 6041h
   Mode mode_display() const { return mode_display_; }  // 6061h
+  Mode mode() const { return mode_; }                  // the mode 6060h asked for
   State state() const { return machine_.state(); }
   uint16_t error_code() const { return machine_.error_code(); }  // 603Fh
   int32_t position_demand() const { return demand_; }            // 6062h: where the trajectory is
@@ -165,7 +166,9 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   int64_t level_of(uint32_t velocity) const;
   void velocity_to(int64_t target, motion::Tick now);
   void halt(bool on, motion::Tick now);
+  void resume_after_halt(motion::Tick now);
   void start_homing(motion::Tick now);
+  void interrupt_homing(motion::Tick now);
   void run_search(motion::Tick now);
   void homing_step(const motion::Step& step);
   void homing_done(bool ok, motion::Tick now);

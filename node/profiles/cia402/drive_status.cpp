@@ -30,12 +30,15 @@ uint16_t Drive::statusword() const {
       const bool moving = core_.moving();
       const int64_t want = std::llabs(int64_t{target_velocity_});
       // Velocity reached: running at the target (its level), or stopped for a 0 target.
+      // Quick stop active (605Ah 5..8): reached once the quick stop has stopped the axis
+      // (6041h bit 10; it showed 0 there: found in review).
       const bool reached =
-          halted_ ? !moving
-                  : (want == 0 ? !moving
-                               : moving && core_.owned_by(*this) && g.level() == want * grid_ &&
-                                     g.phase() != motion::MotionPhase::Accelerating &&
-                                     g.phase() != motion::MotionPhase::Decelerating);
+          halted_ || machine_.state() == State::QuickStopActive
+              ? !moving
+              : (want == 0 ? !moving
+                           : moving && core_.owned_by(*this) && g.level() == want * grid_ &&
+                                 g.phase() != motion::MotionPhase::Accelerating &&
+                                 g.phase() != motion::MotionPhase::Decelerating);
       if (reached) s |= sw::kTargetReached;
       if (!moving) s |= sw_mode::kSpeedZero;
       break;

@@ -34,6 +34,12 @@ void Cia402Service::install_hooks(unsigned a) {
   };
   od::listen(entry(kControlword), [this, a] {
     load_targets(a);  // a target in the same RPDO is stored before this runs
+    // So is a mode: the controlword's bits are read in it (the default RPDO1 maps 6040h
+    // before 6060h, whose reaction came after: a start bit was read in the old mode and its
+    // edge used up there; found in review).
+    const auto mode =
+        static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0));
+    if (mode != drives_[a]->mode()) drives_[a]->set_mode(mode, axes_.now());
     drives_[a]->controlword(dictionary_.get<uint16_t>(index(a, kControlword), 0), axes_.now());
     publish(a);
   });
@@ -149,10 +155,8 @@ void Cia402Service::configure(uint64_t) {
 
 void Cia402Service::power_up(uint64_t) {
   for (unsigned a = 0; a < drives_.size(); ++a) {
-    drives_[a]->power_up(axes_.now());
-    drives_[a]->set_mode(
-        static_cast<cia402::Mode>(dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)),
-        axes_.now());
+    drives_[a]->power_up(axes_.now(), static_cast<cia402::Mode>(
+                                          dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)));
     // Commands and targets are not stored: the master writes them after every start.
     dictionary_.put<uint16_t>(index(a, kControlword), 0, 0);
     if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us());

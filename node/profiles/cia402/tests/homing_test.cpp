@@ -68,7 +68,7 @@ class Homing : public DriveAxis {
     motor.displace(at);
     core.power_up(now);
     core.set_position(static_cast<int32_t>(at));
-    drive.power_up(now);
+    drive.power_up(now, drive.mode());
   }
 };
 

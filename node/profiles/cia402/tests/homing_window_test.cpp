@@ -72,7 +72,7 @@ class HomeSwitchBetweenLimits : public DriveAxis {
     motor.displace(start);
     core.power_up(now);
     core.set_position(static_cast<int32_t>(start));
-    drive.power_up(now);
+    drive.power_up(now, drive.mode());
     core.advance_to(now);
     Parameters& p = drive.parameters();
     p.homing_method = m;
