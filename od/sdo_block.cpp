@@ -73,13 +73,12 @@ SdoAbort BlockReceiver::on_segment(const CanFrame& frame, uint32_t ack_cob_id, u
     } else if (seqno == blksize_) {
       ack(ack_cob_id, out);
     }
-  } else if (last_good_ != 0 && seqno > last_good_ + 1) {
-    gap_acked_ = true;
-    ack(ack_cob_id, out);  // gap: confirm what arrived, the sender repeats the rest
-  } else if (last_good_ == 0 && !gap_acked_ && (seqno == blksize_ || last)) {
-    // The sub-block's end with its first segment lost: ackseq 0, the sender repeats the
-    // whole sub-block (7.2.4.3.10). Before, only the stall timer answered, after half the
-    // SDO timeout, later than clients wait (python-canopen 0.3 s): found in review.
+  } else if ((last_good_ != 0 && seqno > last_good_ + 1) ||
+             (last_good_ == 0 && !gap_acked_ && (seqno == blksize_ || last))) {
+    // A gap: confirm what arrived, the sender repeats the rest. Or the sub-block's end with
+    // its first segment lost: ackseq 0, the sender repeats the whole sub-block (7.2.4.3.10;
+    // before, only the stall timer answered, after half the SDO timeout, later than clients
+    // wait, python-canopen 0.3 s: found in review).
     gap_acked_ = true;
     ack(ack_cob_id, out);
   }
