@@ -31,6 +31,18 @@ class SdoServerTest : public ::testing::Test {
   CanFrame aborted(uint16_t index, uint8_t sub, uint32_t code) {
     return abort_of(kTx, index, sub, code);
   }
+  // Block download segment `part` (7 bytes of `data`) with byte 0 = c | seqno.
+  static CanFrame segment(uint8_t byte0, const Bytes& data, size_t part) {
+    CanFrame f(kRx, {byte0});
+    for (size_t i = 0; i < 7; ++i) f.data[1 + i] = data[part * 7 + i];
+    f.dlc = 8;
+    return f;
+  }
+  // End block download, n = 0, with the CRC of `data`.
+  static CanFrame end_with_crc(const Bytes& data) {
+    const uint16_t crc = crc16_ccitt(data);
+    return req({0xC1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0});
+  }
   std::vector<CanFrame> tick(uint64_t at) {
     now = at;
     std::vector<CanFrame> out;
@@ -170,22 +182,14 @@ TEST_F(SdoServerTest, BlockDownloadOffersTheConfiguredBlockSizeAndAcksEachSubBlo
 TEST_F(SdoServerTest, BlockDownloadGapIsAckedWithTheLastGoodSeqno) {
   ask(req({0xC6, 0x07, 0x20, 0x00, 21, 0, 0, 0}));
   Bytes data = pattern(21);
-  auto seg = [&](uint8_t byte0, size_t part) {
-    CanFrame f(kRx, {byte0});
-    for (size_t i = 0; i < 7; ++i) f.data[1 + i] = data[part * 7 + i];
-    f.dlc = 8;
-    return f;
-  };
+  auto seg = [&](uint8_t byte0, size_t part) { return segment(byte0, data, part); };
   EXPECT_TRUE(send(seg(0x01, 0)).empty());
   EXPECT_EQ(ask(seg(0x83, 2)), rsp({0xA2, 1, 127, 0, 0, 0, 0, 0}));  // seqno 2 missing
   EXPECT_TRUE(send(seg(0x02, 1)).empty());  // the late one: left over, ignored
   EXPECT_TRUE(send(seg(0x01, 1)).empty());  // the repeat starts a new sub-block at 1
   EXPECT_TRUE(send(seg(0x01, 1)).empty());  // duplicate: ignored
   EXPECT_EQ(ask(seg(0x82, 2)), rsp({0xA2, 2, 127, 0, 0, 0, 0, 0}));
-  uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(
-      ask(req({0xC1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
-      rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(ask(end_with_crc(data)), rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
   EXPECT_EQ(dict.value(kDomain, 0), data);
 }
 
@@ -197,12 +201,7 @@ TEST_F(SdoServerTest, SubBlockWhoseFirstSegmentIsLostIsAckedWithZeroAtItsEnd) {
   EXPECT_EQ(ask(req({0xC6, 0x07, 0x20, 0x00, 35, 0, 0, 0})),
             rsp({0xA4, 0x07, 0x20, 0x00, 4, 0, 0, 0}));
   const Bytes data = pattern(35);
-  auto seg = [&](uint8_t byte0, size_t part) {
-    CanFrame f(kRx, {byte0});
-    for (size_t i = 0; i < 7; ++i) f.data[1 + i] = data[part * 7 + i];
-    f.dlc = 8;
-    return f;
-  };
+  auto seg = [&](uint8_t byte0, size_t part) { return segment(byte0, data, part); };
   EXPECT_TRUE(send(seg(0x02, 1)).empty());  // seqno 1 lost
   EXPECT_TRUE(send(seg(0x03, 2)).empty());
   EXPECT_EQ(ask(seg(0x04, 3)), rsp({0xA2, 0, 4, 0, 0, 0, 0, 0}));  // seqno = blksize
@@ -210,10 +209,7 @@ TEST_F(SdoServerTest, SubBlockWhoseFirstSegmentIsLostIsAckedWithZeroAtItsEnd) {
   EXPECT_EQ(ask(seg(0x04, 3)), rsp({0xA2, 4, 4, 0, 0, 0, 0, 0}));
   // The last sub-block: its one segment, with c.
   EXPECT_EQ(ask(seg(0x81, 4)), rsp({0xA2, 1, 4, 0, 0, 0, 0, 0}));
-  const uint16_t crc = crc16_ccitt(data);
-  EXPECT_EQ(
-      ask(req({0xC1, static_cast<uint8_t>(crc), static_cast<uint8_t>(crc >> 8), 0, 0, 0, 0, 0})),
-      rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(ask(end_with_crc(data)), rsp({0xA1, 0, 0, 0, 0, 0, 0, 0}));
   EXPECT_EQ(dict.value(kDomain, 0), data);
 }
 

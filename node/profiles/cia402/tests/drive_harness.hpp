@@ -55,6 +55,12 @@ class DriveAxis : public ::testing::Test {
     while (now < end) drive.advance(now = std::min(end, now + ms(1)));
   }
   void run_s(double seconds) { run(static_cast<Tick>(seconds * kClockHz)); }
+  // 6081h, 6083h, 6084h.
+  void set_profile(uint32_t v, uint32_t acc, uint32_t dec) {
+    drive.parameters().profile_velocity = v;
+    drive.parameters().acceleration = acc;
+    drive.parameters().deceleration = dec;
+  }
   // The master's start sequence: shutdown, switch on, enable operation.
   void enable() {
     cw(0x06);

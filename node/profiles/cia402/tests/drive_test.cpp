@@ -12,14 +12,7 @@
 namespace stepnode::cia402 {
 namespace {
 
-class DriveTest : public DriveAxis {
- protected:
-  void set_profile(uint32_t v, uint32_t acc, uint32_t dec) {
-    drive.parameters().profile_velocity = v;
-    drive.parameters().acceleration = acc;
-    drive.parameters().deceleration = dec;
-  }
-};
+class DriveTest : public DriveAxis {};
 
 TEST_F(DriveTest, TheMastersStartSequenceReachesOperationEnabled) {
   EXPECT_EQ(state(), kSwitchOnDisabled);  // transitions 0 and 1 at power-up

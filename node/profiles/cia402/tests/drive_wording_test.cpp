@@ -11,20 +11,22 @@ namespace {
 
 class DriveWording : public DriveAxis {
  protected:
-  void set_profile(uint32_t v, uint32_t acc, uint32_t dec) {
-    drive.parameters().profile_velocity = v;
-    drive.parameters().acceleration = acc;
-    drive.parameters().deceleration = dec;
-  }
   bool reached() const { return (drive.statusword() & kTargetReached) != 0; }
+  // Enabled, 1,000 steps/s at 10,000 steps/s², a PP set-point to `target` (handshake done).
+  void pp_move_to(int32_t target) {
+    enable();
+    set_profile(1000, 10'000, 10'000);
+    set_point(target);
+  }
+  void set_point(int32_t target) {
+    drive.set_target_position(target);
+    cw(0x1F);
+    cw(0x0F);
+  }
 };
 
 TEST_F(DriveWording, PpHaltReleasedGoesOnToTheTarget) {
-  enable();
-  set_profile(1000, 10'000, 10'000);
-  drive.set_target_position(2000);
-  cw(0x1F);
-  cw(0x0F);
+  pp_move_to(2000);
   run(ms(500));
   cw(0x010F);  // halt
   run(ms(300));
@@ -42,11 +44,7 @@ TEST_F(DriveWording, PpHaltReleasedGoesOnToTheTarget) {
 }
 
 TEST_F(DriveWording, PpHaltReleasedDuringItsRampGoesOnAfterIt) {
-  enable();
-  set_profile(1000, 10'000, 10'000);
-  drive.set_target_position(2000);
-  cw(0x1F);
-  cw(0x0F);
+  pp_move_to(2000);
   run(ms(500));
   cw(0x010F);
   run(ms(20));  // the halt's ramp (100 ms) still runs
@@ -58,14 +56,8 @@ TEST_F(DriveWording, PpHaltReleasedDuringItsRampGoesOnAfterIt) {
 }
 
 TEST_F(DriveWording, PpHaltKeepsTheBufferedSetPointToo) {
-  enable();
-  set_profile(1000, 10'000, 10'000);
-  drive.set_target_position(1000);
-  cw(0x1F);
-  cw(0x0F);
-  drive.set_target_position(-500);
-  cw(0x1F);  // buffered: runs after the first
-  cw(0x0F);
+  pp_move_to(1000);
+  set_point(-500);  // buffered: runs after the first
   run(ms(300));
   cw(0x010F);
   run(ms(300));
@@ -100,11 +92,7 @@ TEST_F(DriveWording, HomingBit4TakenBackInterruptsTheHoming) {
 }
 
 TEST_F(DriveWording, ModesOfOperationZeroChangesNoMode) {
-  enable();
-  set_profile(1000, 10'000, 10'000);
-  drive.set_target_position(1000);
-  cw(0x1F);
-  cw(0x0F);
+  pp_move_to(1000);
   run(ms(300));
   drive.set_mode(Mode::None, now);  // a master's RPDO1 with 6060h left 0
   run(ms(2000));
