@@ -190,7 +190,10 @@ void CanopenNode::load_parameters(uint16_t first, uint16_t last, uint64_t now_us
       dictionary_.reset_to_defaults(index, index);
       report.refuse({index, 0});
     }
-  emcy_.reset();
+  // Reset node ends every condition (the application is reset too); reset communication
+  // only the CiA 301 services' (emcy.hpp).
+  if (last > 0x1FFF) emcy_.reset();
+  else emcy_.reset_communication(now_us);
   if (!report.problem()) return;
   // Manufacturer bytes: the first refused entry (index little-endian, sub), how many were
   // refused (at most 255), and the file: 0 good, 1 damaged and set aside, 2 damaged and
@@ -465,14 +468,17 @@ void CanopenNode::on_receive_overruns(uint32_t socket_total, uint64_t now_us) {
 void CanopenNode::on_bus_event(BusEvent event, uint64_t now_us) {
   switch (event) {
     case BusEvent::ErrorPassive:
-      emcy_.raise(emcy_code::kCanErrorPassive, error_bits::kCommunication, {}, now_us);
+      emcy_.raise(emcy_code::kCanErrorPassive, error_bits::kCommunication, {}, now_us,
+                  emcy_source::kBus);
       break;
-    case BusEvent::ErrorActive: emcy_.clear(emcy_code::kCanErrorPassive, now_us); break;
+    case BusEvent::ErrorActive:
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us, emcy_source::kBus);
+      break;
     case BusEvent::Restarted:
       // "Recovered from bus-off" first, then the error reset that ends the error-passive
       // condition the bus-off came through, with the error register as it is now.
       emcy_.report(emcy_code::kRecoveredFromBusOff, error_bits::kCommunication, {}, now_us);
-      emcy_.clear(emcy_code::kCanErrorPassive, now_us);
+      emcy_.clear(emcy_code::kCanErrorPassive, now_us, emcy_source::kBus);
       break;
     case BusEvent::RxOverflow:
     case BusEvent::TxOverflow:

@@ -13,7 +13,7 @@ uint8_t EmcyProducer::error_register() const { return dictionary_.get<uint8_t>(0
 
 void EmcyProducer::update_register() {
   uint8_t reg = 0;
-  for (const auto& [code, bits] : active_) reg |= bits;
+  for (const auto& [key, condition] : active_) reg |= condition.register_bits;
   if (!active_.empty()) reg |= error_bits::kGeneric;  // bit 0 is set for any error
   dictionary_.put<uint8_t>(0x1001, 0, reg);
 }
@@ -40,10 +40,19 @@ void EmcyProducer::enqueue(uint16_t code, std::array<uint8_t, 5> manufacturer, u
   on_tick(now_us);
 }
 
+namespace {
+// report()'s event is active only while its own message is built.
+constexpr uint16_t kReportSource = 0xFFFF;
+}  // namespace
+
+bool EmcyProducer::active(uint16_t code) const {
+  const auto it = active_.lower_bound({code, 0});
+  return it != active_.end() && it->first.first == code;
+}
+
 void EmcyProducer::raise(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer,
-                         uint64_t now_us) {
-  if (active_.contains(code)) return;
-  active_[code] = register_bits;
+                         uint64_t now_us, uint16_t source) {
+  if (!active_.try_emplace({code, source}, Condition{register_bits, manufacturer}).second) return;
   update_register();
   push_history(code, manufacturer);
   enqueue(code, manufacturer, now_us);
@@ -52,16 +61,16 @@ void EmcyProducer::raise(uint16_t code, uint8_t register_bits, std::array<uint8_
 void EmcyProducer::report(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer,
                           uint64_t now_us) {
   // The register shows the event in the message itself, then falls back.
-  active_[code] = register_bits;
+  active_[{code, kReportSource}] = Condition{register_bits, manufacturer};
   update_register();
   push_history(code, manufacturer);
   enqueue(code, manufacturer, now_us);
-  active_.erase(code);
+  active_.erase({code, kReportSource});
   update_register();
 }
 
-void EmcyProducer::clear(uint16_t code, uint64_t now_us) {
-  if (!active_.erase(code)) return;
+void EmcyProducer::clear(uint16_t code, uint64_t now_us, uint16_t source) {
+  if (!active_.erase({code, source})) return;
   update_register();
   if (active_.empty()) enqueue(emcy_code::kNoError, {}, now_us);
 }
@@ -91,6 +100,18 @@ void EmcyProducer::reset() {
   pending_.clear();
   sent_any_ = false;
   update_register();
+}
+
+void EmcyProducer::reset_communication(uint64_t now_us) {
+  std::erase_if(
+      active_, [](const auto& entry) { return entry.first.second == emcy_source::kCommunication; });
+  pending_.clear();
+  sent_any_ = false;
+  update_register();
+  for (const auto& [key, condition] : active_) {
+    push_history(key.first, condition.manufacturer);
+    enqueue(key.first, condition.manufacturer, now_us);  // sent once EMCY is enabled
+  }
 }
 
 }  // namespace stepnode::node

@@ -6,6 +6,7 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <utility>
 
 #include "node/deadline.hpp"
 #include "od/can_frame.hpp"
@@ -41,6 +42,16 @@ constexpr uint16_t kRpdoTimeout = 0x8250;
 constexpr uint16_t kSyncLength = 0x8240;  // unexpected SYNC data length
 }  // namespace emcy_code
 
+// Who raised a condition. One code may stand for errors of several sources (0x8130: a lost
+// heartbeat, and the fault 6007h makes of it in each CiA 402 drive), each ended by its own;
+// EMCY 0x0000 goes out when none is left (found in review: the heartbeat's return reset the
+// error of a drive still in Fault).
+namespace emcy_source {
+constexpr uint16_t kCommunication = 0;  // the CiA 301 services: they end at reset communication
+constexpr uint16_t kBus = 1;            // the CAN controller's state: it outlives that reset
+constexpr uint16_t kAxis = 0x100;       // + the axis index: the application's, which does too
+}  // namespace emcy_source
+
 class EmcyProducer {
  public:
   using Send = std::function<void(const od::CanFrame&)>;
@@ -49,13 +60,14 @@ class EmcyProducer {
   // Raises an error condition (and sends the EMCY). A condition already active is not
   // sent again. `register_bits` are OR-ed into 0x1001 while it is active.
   void raise(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer = {},
-             uint64_t now_us = 0);
+             uint64_t now_us = 0, uint16_t source = emcy_source::kCommunication);
   // An event that is reported but leaves nothing active (e.g. PDO length error).
   void report(uint16_t code, uint8_t register_bits, std::array<uint8_t, 5> manufacturer = {},
               uint64_t now_us = 0);
   // Clears a condition; when none is left active, EMCY 0x0000 ("error reset") goes out.
-  void clear(uint16_t code, uint64_t now_us = 0);
-  bool active(uint16_t code) const { return active_.contains(code); }
+  void clear(uint16_t code, uint64_t now_us = 0, uint16_t source = emcy_source::kCommunication);
+  // Whether the code is active, from any source.
+  bool active(uint16_t code) const;
   uint8_t error_register() const;
 
   // Sending is allowed only in pre-operational and operational; queued messages wait.
@@ -68,6 +80,11 @@ class EmcyProducer {
   uint64_t next_deadline_us(uint64_t now_us) const;
   // Reset node: forget everything (history included).
   void reset();
+  // Reset communication: the CiA 301 services' conditions end with their services (no EMCY);
+  // the bus's and the application's are still there and are announced again once EMCY may
+  // be sent (0x1003 was put back with the other communication objects). They were forgotten,
+  // 0x1001 reading 0 with an axis still in error: found in review.
+  void reset_communication(uint64_t now_us);
 
  private:
   void enqueue(uint16_t code, std::array<uint8_t, 5> manufacturer, uint64_t now_us);
@@ -76,7 +93,11 @@ class EmcyProducer {
 
   od::Dictionary& dictionary_;
   Send send_;
-  std::map<uint16_t, uint8_t> active_;  // code -> register bits
+  struct Condition {
+    uint8_t register_bits = 0;
+    std::array<uint8_t, 5> manufacturer{};
+  };
+  std::map<std::pair<uint16_t, uint16_t>, Condition> active_;  // (code, source)
   std::deque<od::CanFrame> pending_;
   uint64_t last_sent_us_ = 0;
   bool sent_any_ = false;

@@ -181,5 +181,34 @@ TEST_F(Cia402Bus, AModeByteOfZeroKeepsTheMode) {
   EXPECT_NE(sdo_read(0x606C, 0), 0u) << "still moving at the target velocity";
 }
 
+TEST_F(Cia402Bus, TheMastersHeartbeatBackLeavesTheDrivesFaultAnError) {
+  // 0x8130 is both the heartbeat consumer's error and the fault 6007h makes of it in each
+  // drive: the heartbeat's return ends its own, not the drives' (found in review: it sent
+  // the error reset and 0x1001 read 0 with both drives in Fault).
+  ASSERT_EQ(sdo_write(0x1016, 1, (0x7Fu << 16) | 100), 0u);
+  frame(CanFrame(0x700 + 0x7F, {0x05}));
+  for (const uint16_t cw : {0x06, 0x07, 0x0F}) rpdo1(cw, 3);
+  advance_ms(250);  // the master's heartbeat stops: both drives fault
+  ASSERT_EQ(*sdo_read(0x6041, 0) & 0x4F, 0x08u);
+  EXPECT_EQ(*sdo_read(0x1001, 0), 0x31u) << "generic, communication, device profile";
+  const size_t from = sent.size();
+  frame(CanFrame(0x700 + 0x7F, {0x05}));  // the master is back
+  advance_ms(2);
+  for (size_t i = from; i < sent.size(); ++i)
+    EXPECT_FALSE(sent[i].id == kEmcyId && sent[i].data[0] == 0 && sent[i].data[1] == 0)
+        << "no error reset while the drives are in Fault";
+  EXPECT_EQ(*sdo_read(0x1001, 0), 0x21u) << "generic, device profile";
+  const size_t before_reset = sent.size();
+  for (const uint16_t controlword : {0x6040, 0x6840}) {  // fault reset of both drives
+    ASSERT_EQ(sdo_write(controlword, 0, 0x0000, 2), 0u);
+    ASSERT_EQ(sdo_write(controlword, 0, 0x0080, 2), 0u);
+  }
+  advance_ms(2);
+  EXPECT_EQ(*sdo_read(0x1001, 0), 0u);
+  EXPECT_EQ(with_id(kEmcyId, before_reset),
+            std::vector<CanFrame>{CanFrame(kEmcyId, {0, 0, 0, 0, 0, 0, 0, 0})})
+      << "now the error reset";
+}
+
 }  // namespace
 }  // namespace stepnode::node::test

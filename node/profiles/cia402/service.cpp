@@ -159,7 +159,7 @@ void Cia402Service::power_up(uint64_t) {
                                           dictionary_.get<int8_t>(index(a, kModesOfOperation), 0)));
     // Commands and targets are not stored: the master writes them after every start.
     dictionary_.put<uint16_t>(index(a, kControlword), 0, 0);
-    if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us());
+    if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us(), emcy_source::kAxis + a);
     reported_[a] = 0;
     publish(a);
   }
@@ -221,11 +221,11 @@ void Cia402Service::report_fault(unsigned a) {
                      drives_[a]->state() == cia402::State::FaultReactionActive;
   const uint16_t code = fault ? drives_[a]->error_code() : 0;
   if (code == reported_[a]) return;
-  if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us());
+  if (reported_[a]) emcy_.clear(reported_[a], axes_.now_us(), emcy_source::kAxis + a);
   reported_[a] = code;
   if (code)
     emcy_.raise(code, error_bits::kGeneric | error_bits::kProfile,
-                {static_cast<uint8_t>(a + 1), 0, 0, 0, 0}, axes_.now_us());
+                {static_cast<uint8_t>(a + 1), 0, 0, 0, 0}, axes_.now_us(), emcy_source::kAxis + a);
 }
 
 }  // namespace stepnode::node

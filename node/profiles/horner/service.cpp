@@ -107,9 +107,9 @@ void HornerService::on_axis_event(unsigned a, const motion::AxisEvent& e) {
     emcy_.raise(code, error_bits::kManufacturer,
                 {static_cast<uint8_t>(e.error_bits), static_cast<uint8_t>(e.status),
                  static_cast<uint8_t>(e.status >> 8), static_cast<uint8_t>(a + 1), 0},
-                axes_.now_us());
+                axes_.now_us(), emcy_source::kAxis + a);
   } else if (!(e.status & motion::status::kErrors) && emcy_.active(code)) {
-    emcy_.clear(code, axes_.now_us());
+    emcy_.clear(code, axes_.now_us(), emcy_source::kAxis + a);
   }
 }
 
