@@ -138,7 +138,7 @@ void CanopenNode::install_service_hooks() {
   for (const auto& [index, obj] : od.objects()) {
     const bool filtered = index == 0x1005 || index == 0x1012 || index == 0x1014 ||
                           index == 0x1016 || (index >= 0x1200 && index <= 0x1203) ||
-                          (index >= 0x1400 && index <= 0x17FF);
+                          (index >= 0x1400 && index <= 0x1BFF);  // TPDOs: remote frames
     if (!filtered) continue;
     for (auto& [sub, e] : od.object(index)->entries)
       od::listen(e, [this] { filters_dirty_ = true; });

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "od/cob_id.hpp"
 #include "od/communication_objects.hpp"
 
 namespace stepnode::node {
@@ -50,6 +51,7 @@ void PdoEngine::reload(uint64_t now_us) {
     t.mapping = read_mapping(dictionary_, od::tpdo_mapping(n));
     t.valid = !(tid & kInvalid) && !t.mapping.empty();
     t.cob_id = tid & 0x7FF;
+    t.rtr_allowed = (tid & od::kCobGenerate) == 0;  // bit 30: no RTR
     t.type = dictionary_.get<uint8_t>(tc, 2);
     t.inhibit_us = uint64_t{dictionary_.get<uint16_t>(tc, 3)} * 100;
     t.event_us = uint64_t{dictionary_.get<uint16_t>(tc, 5)} * 1000;
@@ -152,7 +154,7 @@ bool PdoEngine::in_window(uint64_t sync_us, uint64_t at_us) const {
 bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx_us) {
   if (dirty_) reload(now_us);
   if (rx_us == 0 || rx_us > now_us) rx_us = now_us;
-  if (frame.rtr) return false;
+  if (frame.rtr) return remote_request(frame);
   bool consumed = false;
   for (auto& r : rpdos_) {
     if (!r.valid || r.cob_id != frame.id) continue;
@@ -186,6 +188,20 @@ bool PdoEngine::on_frame(const od::CanFrame& frame, uint64_t now_us, uint64_t rx
     }
   }
   return consumed;
+}
+
+bool PdoEngine::remote_request(const od::CanFrame& frame) {
+  // CiA 301 7.2.2: a remote frame on a TPDO whose COB-ID allows it (bit 30 = 0) asks for
+  // the PDO. An event-driven one goes out on the tick that follows the frame (its inhibit
+  // time kept), a synchronous one with its next SYNC. (A master could clear bit 30, was
+  // confirmed and then heard nothing: found in review; python-canopen clears it by default.)
+  bool asked = false;
+  for (auto& t : tpdos_) {
+    if (!t.valid || !t.rtr_allowed || t.cob_id != frame.id) continue;
+    t.send_request = t.event_pending = true;
+    asked = true;
+  }
+  return asked;
 }
 
 void PdoEngine::transmit(Tpdo& pdo, std::vector<uint8_t> data, uint64_t now_us) {

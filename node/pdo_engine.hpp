@@ -67,6 +67,7 @@ class PdoEngine {
   };
   struct Tpdo {
     bool valid = false;
+    bool rtr_allowed = false;  // COB-ID bit 30 = 0: a remote frame asks for it
     uint32_t cob_id = 0;
     uint8_t type = 0;
     uint64_t inhibit_us = 0;
@@ -84,6 +85,8 @@ class PdoEngine {
   };
 
   void reload(uint64_t now_us);
+  // A remote frame on a TPDO's COB-ID; true if it asked for one.
+  bool remote_request(const od::CanFrame& frame);
   // An RPDO is no longer late (received, destroyed): EMCY 0x8250 ends when none is late.
   void end_timeout(Rpdo& pdo, uint64_t now_us);
   // A length error (EMCY 0x8210 too short, 0x8220 too long) is active from the RPDO's

@@ -33,10 +33,15 @@ void add_configured(std::vector<ReceiveFilter>& out, const od::Dictionary& od, u
   }
   for (unsigned ch = 0; ch < od::kSdoServerChannels; ++ch)
     if (const od::SdoChannelIds ids = od::sdo_channel_ids(od, ch); ids.valid) add(ids.rx);
-  // RPDOs with something mapped (an empty one is silent: CiA 301 7.5.2.36).
+  // RPDOs with something mapped (an empty one is silent: CiA 301 7.5.2.36), and the remote
+  // frames that ask for a TPDO whose COB-ID allows them (bit 30 = 0).
   for (unsigned n = 0; n < pdo_count; ++n) {
     const uint32_t cob = od.get<uint32_t>(od::rpdo_parameter(n), 1);
     if (valid(cob) && od.get<uint8_t>(od::rpdo_mapping(n), 0) != 0) add(cob);
+    const uint32_t tpdo = od.get<uint32_t>(od::tpdo_parameter(n), 1);
+    if (valid(tpdo) && (tpdo & od::kCobGenerate) == 0 &&
+        od.get<uint8_t>(od::tpdo_mapping(n), 0) != 0)
+      out.push_back({tpdo & 0x7FF, ReceiveFilter::Frames::DataAndRemote});
   }
 }
 

@@ -198,7 +198,8 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   const char* kind = rx ? "RPDO" : "TPDO";
 
   // PDOs 1-4 have the pre-defined connection set IDs; the others start without an ID.
-  // TPDOs carry bit 30 (no RTR): this device does not answer remote frames.
+  // TPDOs start with bit 30 (no RTR); a master may clear it, and a remote frame then asks for
+  // the PDO (node/pdo_engine.cpp).
   uint32_t base = (rx ? cob::kRpdo1 : cob::kTpdo1) + 0x100 * n;
   uint32_t no_rtr = rx ? 0 : kCobGenerate;
   uint32_t cob_id = (n < 4 ? base + node_id : kCobInvalid) | no_rtr;
@@ -222,8 +223,8 @@ void add_pdo(Dictionary& od, PdoDirection dir, unsigned n, uint8_t node_id) {
   id.validate = [&od, comm_index](std::span<const uint8_t> d) {
     return check_cob_id(od.get<uint32_t>(comm_index, 1), u32(d), kCobInvalid);
   };
-  // Types 0..240 (synchronous), 254/255 (event-driven). 252/253 need RTR, which this device
-  // does not answer, and 241..251 are reserved.
+  // Types 0..240 (synchronous), 254/255 (event-driven). 252/253 (sent only when asked by a
+  // remote frame) are not supported, and 241..251 are reserved.
   type.validate = [](std::span<const uint8_t> d) {
     return d[0] <= 240 || d[0] >= 254 ? SdoAbort::None : SdoAbort::InvalidValue;
   };
