@@ -107,7 +107,7 @@ void SocketCan::set_error_filter(uint32_t classes) {
 size_t SocketCan::request_receive_buffer(size_t bytes) {
   // The kernel takes an int and doubles it (for its bookkeeping) up to INT_MAX.
   const int asked = static_cast<int>(std::min<size_t>(bytes, INT_MAX / 2));
-  if (receive_buffer() >= 2 * static_cast<size_t>(asked)) return receive_buffer();
+  if (const size_t now = receive_buffer(); now >= 2 * static_cast<size_t>(asked)) return now;
   if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &asked, sizeof asked) != 0 &&
       ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &asked, sizeof asked) != 0)
     spdlog::warn("{}: receive buffer of {} bytes refused: {}", iface_, bytes, std::strerror(errno));
