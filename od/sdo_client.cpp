@@ -297,8 +297,11 @@ void SdoClient::State::send_download_segment(std::vector<CanFrame>& out) {
 void SdoClient::State::upload_initiate_response(const CanFrame& f, std::vector<CanFrame>& out) {
   const uint8_t b0 = f.data[0];
   if (b0 & kExpedited) {
-    const size_t count = (b0 & kSizeIndicated) ? 4 - initiate_n(b0) : 4;
-    return finish(Bytes(f.data.begin() + 4, f.data.begin() + 4 + count));
+    const bool sized = (b0 & kSizeIndicated) != 0;
+    const size_t count = sized ? 4 - initiate_n(b0) : 4;
+    finish(Bytes(f.data.begin() + 4, f.data.begin() + 4 + count));
+    result.size_unspecified = !sized;
+    return;
   }
   t.size_indicated = (b0 & kSizeIndicated) != 0;
   t.size = get_u32(&f.data[4]);

@@ -1,6 +1,7 @@
 // SDO client state machine (CiA 301 7.2.4), the master's side of every transfer type.
 // Used by stepctl, the bridge and tests. Pure: frames in, frames out, time passed in.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -19,7 +20,16 @@ struct SdoResult {
   // server's channel. With a Timeout it means the channel was busy, not the node absent.
   unsigned foreign_replies = 0;
   Bytes data;  // uploaded data
+  // An expedited upload answered without the size (e = 1, s = 0, CiA 301 7.2.4.3.6):
+  // `data` holds all four bytes, and the object's data type says how many are its value.
+  bool size_unspecified = false;
   bool ok() const { return abort == SdoAbort::None; }
+  // The uploaded value of an object whose type is `type_size` bytes long: an answer
+  // without the size cut to it, any other as it came (a wrong size stays visible).
+  Bytes value_of_size(size_t type_size) const {
+    if (!size_unspecified || type_size == 0 || data.size() <= type_size) return data;
+    return Bytes(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(type_size));
+  }
 };
 
 class SdoClient {

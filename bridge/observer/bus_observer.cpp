@@ -50,7 +50,8 @@ struct Node {
   uint8_t error_code_reads = 0;
   bool refreshing = false;
   uint8_t refresh_axis = 0;
-  bool paced = false;  // its transfer in flight is counted by the pacer
+  bool paced = false;       // its transfer in flight is counted by the pacer
+  uint32_t read_epoch = 0;  // the plan's epoch when its read in flight was started
 };
 
 bool sdo_allowed(NodeState s) {
@@ -270,14 +271,15 @@ void BusObserver::Impl::on_sdo(uint8_t id, const ObservedFrame& of, uint64_t now
     // A master is remapping a TPDO: stop decoding it now (its next frames may already
     // use the new layout) and read the TPDO parameters again once the channel is quiet.
     tpdo.suspend(id, static_cast<uint16_t>(*ev.foreign_download & 0x1FF));
-    n->plan.restart_tpdos();
+    n->plan.restart_tpdos();  // a read of ours in flight is answered for the old cursor
   }
   if (ev.foreign_download && *ev.foreign_download == kHeartbeatProducerTime) {
     // A master changed the node's heartbeat period (or switched it off): the measured
     // interval no longer holds, so a longer period would look like a loss. Forget it and
-    // read the node again (0x1017 first); until then the timeout is the default one.
+    // read 0x1017 again; until then the timeout is the default one. The node is the same:
+    // its identity, axes and mapping stay as they were read.
     n->heartbeat.forget_interval();
-    begin_discovery(*n);
+    n->plan.reread_heartbeat_time();
   }
   if (ev.completed) read_done(id, *n, now, of.can_time_ns, out);
   else pump(*n, now, out);
@@ -299,6 +301,9 @@ void BusObserver::Impl::begin_discovery(Node& n) {
 void BusObserver::Impl::read_done(uint8_t id, Node& n, uint64_t now, uint64_t can_time_ns,
                                   std::vector<od::CanFrame>& out) {
   if (n.refreshing) return refresh_done(id, n, now, can_time_ns, out);
+  // A master's write moved the plan's cursor while the read was in flight on a channel
+  // of the bridge's own: the answer is another object's. The plan reads again.
+  if (n.read_epoch != n.plan.epoch()) return pump(n, now, out);
   const bool had_mapping = n.plan.mapping_read(), was_finished = n.plan.finished();
   const ReadOutcome r = n.plan.on_result(n.sdo.result());
   if (r == ReadOutcome::Failed) {
@@ -348,16 +353,16 @@ void BusObserver::Impl::refresh_done(uint8_t id, Node& n, uint64_t now, uint64_t
   n.backoff.reset();
   n.error_code_reads &= static_cast<uint8_t>(~(1u << n.refresh_axis));
   if (r == ReadOutcome::Value)
-    tpdo.apply_read(id, cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, result.data,
-                    can_time_ns);
+    tpdo.apply_read(id, cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0,
+                    result.value_of_size(2), can_time_ns);  // 603Fh: UNSIGNED16
   pump(n, now, out);
 }
 
 void BusObserver::Impl::pump(Node& n, uint64_t now, std::vector<od::CanFrame>& out) {
   settle(n);
   if (!sdo_allowed(n.heartbeat.state())) return;
-  const bool refresh = n.plan.finished() && n.error_code_reads != 0 && !n.refreshing;
-  if (n.plan.finished() && !refresh) return;
+  const bool refresh = !n.plan.wants_read() && n.error_code_reads != 0 && !n.refreshing;
+  if (!n.plan.wants_read() && !refresh) return;
   if (!n.backoff.ready(now) || !n.sdo.can_start(now) || !pacer.may_start(now)) return;
   if (refresh) {
     n.refresh_axis = static_cast<uint8_t>(__builtin_ctz(n.error_code_reads));
@@ -365,6 +370,7 @@ void BusObserver::Impl::pump(Node& n, uint64_t now, std::vector<od::CanFrame>& o
     n.sdo.start_upload(cia402::obj::index(n.refresh_axis, cia402::obj::kErrorCode), 0, now, out);
   } else {
     const SdoRead r = n.plan.next();
+    n.read_epoch = n.plan.epoch();
     n.sdo.start_upload(r.index, r.sub, now, out);
   }
   if (n.sdo.idle()) return;

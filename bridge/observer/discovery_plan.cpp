@@ -27,12 +27,14 @@ constexpr size_t kMaxNameLength = 255;
 // What the snapshot reads of each axis, in this order.
 constexpr uint16_t kSnapshotOffsets[] = {0x01, 0x18, 0x19, 0x05, 0x06};
 constexpr uint8_t kSnapshotItems = std::size(kSnapshotOffsets);
+constexpr size_t kSnapshotSizes[kSnapshotItems] = {2, 1, 1, 4, 4};
 // What the snapshot reads of each CiA 402 axis (axis 1 indices), in this order.
 constexpr uint16_t kDriveSnapshotObjects[] = {
     cia402::obj::kStatusword,           cia402::obj::kModesOfOperationDisplay,
     cia402::obj::kPositionActual,       cia402::obj::kVelocityActual,
     cia402::obj::kFollowingErrorActual, cia402::obj::kErrorCode};
 constexpr uint8_t kDriveSnapshotItems = std::size(kDriveSnapshotObjects);
+constexpr size_t kDriveSnapshotSizes[kDriveSnapshotItems] = {2, 1, 4, 4, 4, 2};
 
 // Little-endian unsigned of exactly `size` bytes; a value of another size is a device
 // error that retrying will not fix, so the caller takes it as absent.
@@ -56,6 +58,8 @@ ReadOutcome classify(const od::SdoResult& r) {
 }
 
 void DiscoveryPlan::restart_all() {
+  ++epoch_;
+  heartbeat_reread_ = false;
   phase_ = Phase::HeartbeatTime;
   snapshot_wanted_ = true;
   k_ = 0;
@@ -66,6 +70,7 @@ void DiscoveryPlan::restart_all() {
 
 void DiscoveryPlan::restart_tpdos() {
   if (phase_ < Phase::TpdoComm || !info_.has_axes()) return;
+  ++epoch_;
   // The snapshot is read again only when the remap came before it was finished.
   if (phase_ == Phase::Done) {
     snapshot_wanted_ = false;
@@ -78,7 +83,16 @@ void DiscoveryPlan::restart_tpdos() {
   new_tpdos_.clear();
 }
 
+void DiscoveryPlan::reread_heartbeat_time() {
+  ++epoch_;
+  // Until it is read, the old period says nothing of the new one.
+  info_.heartbeat_period_ms = 0;
+  info_.heartbeat_period_read = false;
+  if (phase_ != Phase::HeartbeatTime) heartbeat_reread_ = true;  // else it is next anyway
+}
+
 SdoRead DiscoveryPlan::next() const {
+  if (heartbeat_reread_) return {kHeartbeatTime, 0};
   switch (phase_) {
     case Phase::HeartbeatTime: return {kHeartbeatTime, 0};
     case Phase::DeviceType: return {kDeviceType, 0};
@@ -98,11 +112,34 @@ SdoRead DiscoveryPlan::next() const {
 }
 
 ReadOutcome DiscoveryPlan::on_result(const od::SdoResult& result) {
-  if (finished()) return ReadOutcome::Failed;
+  if (!wants_read()) return ReadOutcome::Failed;
   const ReadOutcome outcome = classify(result);
-  if (outcome == ReadOutcome::Value) value(result.data);
-  else if (outcome == ReadOutcome::Absent) absent();
-  return outcome;  // Failed: the cursor stays, the same read is repeated
+  if (outcome == ReadOutcome::Failed) return outcome;  // the same read is repeated
+  const od::Bytes data = result.value_of_size(type_size());
+  if (heartbeat_reread_) {
+    heartbeat_reread_ = false;
+    if (outcome == ReadOutcome::Value) heartbeat_time_value(data);
+  } else if (outcome == ReadOutcome::Value) {
+    value(data);
+  } else {
+    absent();
+  }
+  return outcome;
+}
+
+size_t DiscoveryPlan::type_size() const {
+  if (heartbeat_reread_) return 2;
+  switch (phase_) {
+    case Phase::HeartbeatTime: return 2;  // UNSIGNED16
+    case Phase::TpdoCount: return 1;      // UNSIGNED8
+    case Phase::DeviceType:
+    case Phase::Identity:
+    case Phase::TpdoComm:
+    case Phase::TpdoEntry: return 4;  // UNSIGNED32
+    case Phase::Snapshot: return kSnapshotSizes[entry_];
+    case Phase::DriveSnapshot: return kDriveSnapshotSizes[entry_];
+    default: return 0;  // the name (a string), the probes (any answer), PSCALE (REAL64)
+  }
 }
 
 // 0x1008, VISIBLE_STRING; some devices pad with NULs. A name is short: a node that sends
@@ -130,10 +167,7 @@ void DiscoveryPlan::value(const od::Bytes& d) {
   uint32_t v = 0;
   switch (phase_) {
     case Phase::HeartbeatTime:
-      if (exact_u32(d, 2, v)) {
-        info_.heartbeat_period_ms = static_cast<uint16_t>(v);
-        info_.heartbeat_period_read = true;
-      }
+      heartbeat_time_value(d);
       phase_ = Phase::DeviceType;
       return;
     case Phase::DeviceType:
@@ -196,6 +230,13 @@ void DiscoveryPlan::value(const od::Bytes& d) {
     case Phase::DriveSnapshot: drive_snapshot_value(d); return next_drive_snapshot();
     case Phase::Done: return;
   }
+}
+
+void DiscoveryPlan::heartbeat_time_value(const od::Bytes& d) {
+  uint32_t v = 0;
+  if (!exact_u32(d, 2, v)) return;
+  info_.heartbeat_period_ms = static_cast<uint16_t>(v);
+  info_.heartbeat_period_read = true;
 }
 
 void DiscoveryPlan::absent() {

@@ -49,11 +49,20 @@ class DiscoveryPlan {
   // kept. No effect before the TPDO phase (it is still to come) or on a device without
   // axes (its TPDOs are not decoded).
   void restart_tpdos();
+  // Only the heartbeat time 0x1017 again (another master wrote it), before whatever is
+  // still to read. Everything else is kept: the node is the same.
+  void reread_heartbeat_time();
+  // Counts the restarts above: a read started before one is answered for a cursor that
+  // has moved (a channel of the bridge's own is not interrupted by the master's write),
+  // so its answer must not be taken.
+  uint32_t epoch() const { return epoch_; }
 
+  // Discovery is complete (a 0x1017 read again may follow: wants_read()).
   bool finished() const { return phase_ == Phase::Done; }
+  bool wants_read() const { return phase_ != Phase::Done || heartbeat_reread_; }
   // True once the TPDO parameters are read (the snapshot may still be in progress).
   bool mapping_read() const { return phase_ >= Phase::Snapshot; }
-  SdoRead next() const;  // only while !finished()
+  SdoRead next() const;  // only while wants_read()
   ReadOutcome on_result(const od::SdoResult& result);
 
   const NodeInfo& info() const { return info_; }
@@ -74,7 +83,10 @@ class DiscoveryPlan {
     DriveSnapshot,
     Done,
   };
+  // The size of the value next() reads, from its data type (0: variable, a string).
+  size_t type_size() const;
   void value(const od::Bytes& data);
+  void heartbeat_time_value(const od::Bytes& data);
   static std::string device_name(const od::Bytes& data);
   static double pscale(const od::Bytes& data);
   void absent();
@@ -90,6 +102,8 @@ class DiscoveryPlan {
   void next_drive_snapshot();
 
   Phase phase_ = Phase::HeartbeatTime;
+  bool heartbeat_reread_ = false;
+  uint32_t epoch_ = 0;
   uint16_t k_ = 0;  // identity sub, axis or TPDO number, by phase
   // (entry_ is also the item of the axis being read in the snapshot phases)
   uint8_t entry_ = 0;            // mapping entry being read (1-based)

@@ -99,12 +99,17 @@ SdoChannel::FrameEvent SdoChannel::on_response(const od::CanFrame& f, uint64_t n
 }
 
 std::optional<uint16_t> SdoChannel::confirmed_download(const od::CanFrame& f) {
-  if (!download_pending_ || f.dlc < 4) return std::nullopt;
+  if (!download_pending_ || f.dlc < 4 || od::get_u16(&f.data[1]) != download_index_)
+    return std::nullopt;
+  // Only the server's answer to that initiate ends the wait: its confirmation, or an
+  // abort naming the object. Other answers may come first (the one to a read of ours
+  // that the master's request cut short is still answered before it, 7.2.4.1).
   const uint8_t b0 = f.data[0];
   const bool confirms = command(b0) == scs::kDownloadInitiate ||
                         (command(b0) == scs::kBlockDownload && block_sub(b0) == kBlockInitiate);
-  download_pending_ = false;  // confirmed or refused: either way this exchange is over
-  if (confirms && od::get_u16(&f.data[1]) == download_index_) return download_index_;
+  if (!confirms && command(b0) != scs::kAbort) return std::nullopt;
+  download_pending_ = false;
+  if (confirms) return download_index_;
   return std::nullopt;
 }
 

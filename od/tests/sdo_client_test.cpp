@@ -73,9 +73,24 @@ TEST_F(SdoClientTest, ExpeditedUploadSizes) {
   upload(kU16, 0, Mode::Auto);
   feed(rsp({0x4B, 0x01, 0x20, 0x00, 0x34, 0x12, 0xEE, 0xEE}));
   EXPECT_EQ(client.result().data, (Bytes{0x34, 0x12}));
+  EXPECT_FALSE(client.result().size_unspecified);
+  EXPECT_EQ(client.result().value_of_size(1), (Bytes{0x34, 0x12}));  // a wrong size stays
   upload(kU32, 0, Mode::Auto);  // e = 1, s = 0: four bytes of unspecified size
   feed(rsp({0x42, 0x02, 0x20, 0x00, 1, 2, 3, 4}));
   EXPECT_EQ(client.result().data, (Bytes{1, 2, 3, 4}));
+  EXPECT_TRUE(client.result().size_unspecified);
+}
+
+// 7.2.4.3.6: with e = 1 and s = 0 the data bytes hold an unspecified number of bytes;
+// the client takes the object's size from its data type (another vendor's device may
+// answer an UNSIGNED8 that way, the rest of the four bytes anything).
+TEST_F(SdoClientTest, AnExpeditedUploadWithoutTheSizeIsCutToTheObjectsType) {
+  upload(kU8, 0, Mode::Auto);
+  feed(rsp({0x42, 0x00, 0x20, 0x00, 0x02, 0xEE, 0xEE, 0xEE}));
+  ASSERT_TRUE(client.result().ok());
+  EXPECT_EQ(client.result().value_of_size(1), Bytes{0x02});
+  EXPECT_EQ(client.result().value_of_size(2), (Bytes{0x02, 0xEE}));
+  EXPECT_EQ(client.result().value_of_size(4), (Bytes{0x02, 0xEE, 0xEE, 0xEE}));
 }
 
 TEST_F(SdoClientTest, SegmentedUpload) {

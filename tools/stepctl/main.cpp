@@ -83,21 +83,28 @@ std::string show(const ObjectCatalog& cat, uint16_t index, uint8_t sub, const od
          " (" + std::string(od::type_name(info->type)) + ")";
 }
 
+// An upload's value: an expedited answer without the size (another vendor's device, CiA
+// 301 7.2.4.3.6) carries four bytes, of which the object's type in the EDS says how many.
+od::Bytes value_of(const ObjectCatalog& cat, uint16_t index, uint8_t sub, const od::SdoResult& r) {
+  auto info = cat.find(index, sub);
+  return r.value_of_size(info ? od::fixed_size(info->type) : 0);
+}
+
 int cmd_read(MasterBus& bus, const ObjectCatalog& cat, int node, const std::string& object,
              bool block, const std::string& output) {
   auto [index, sub] = parse_object_address(object);
   od::SdoResult r = bus.upload(static_cast<uint8_t>(node), index, sub, mode_of(block));
   check(r, static_cast<uint8_t>(node), index, sub);
+  const od::Bytes data = value_of(cat, index, sub, r);
   if (!output.empty()) {
     std::ofstream out(output, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(r.data.data()),
-              static_cast<std::streamsize>(r.data.size()));
+    out.write(reinterpret_cast<const char*>(data.data()),
+              static_cast<std::streamsize>(data.size()));
     if (!out) throw Failure("cannot write " + output);
-    std::cout << addr(index, sub) << ": " << r.data.size() << " bytes written to " << output
-              << "\n";
+    std::cout << addr(index, sub) << ": " << data.size() << " bytes written to " << output << "\n";
     return 0;
   }
-  std::cout << show(cat, index, sub, r.data) << "\n";
+  std::cout << show(cat, index, sub, data) << "\n";
   return 0;
 }
 
@@ -140,7 +147,7 @@ int cmd_dump(MasterBus& bus, const ObjectCatalog& cat, int node) {
     if (r.abort == od::SdoAbort::Timeout)
       throw Failure("node " + std::to_string(node) + ": no SDO answer");
     if (r.ok()) {
-      std::cout << show(cat, o.index, o.sub, r.data) << "\n";
+      std::cout << show(cat, o.index, o.sub, value_of(cat, o.index, o.sub, r)) << "\n";
     } else if (r.abort != od::SdoAbort::NoObject && r.abort != od::SdoAbort::NoSubindex) {
       ++failures;
       std::cout << addr(o.index, o.sub) << " " << o.name << ": " << od::abort_text(r.abort) << "\n";
