@@ -81,6 +81,14 @@ void EmcyProducer::on_tick(uint64_t now_us) {
   uint64_t inhibit_us = uint64_t{dictionary_.get<uint16_t>(0x1015, 0)} * 100;
   while (!pending_.empty()) {
     if (sent_any_ && now_us < last_sent_us_ + inhibit_us) return;
+    // 0x1014 as it is now (CiA 301 7.5.2.17): a master may have made the EMCY invalid, or
+    // moved it to another CAN-ID, while this message waited for the inhibit time.
+    const uint32_t cob_id = dictionary_.get<uint32_t>(0x1014, 0);
+    if (cob_id & 0x80000000u) {  // EMCY does not exist: nothing waiting is produced
+      pending_.clear();
+      return;
+    }
+    pending_.front().id = cob_id & 0x7FF;
     send_(pending_.front());
     pending_.pop_front();
     last_sent_us_ = now_us;

@@ -149,6 +149,36 @@ TEST_F(EmcyTest, CobIdChangesOnlyThroughInvalid) {
   EXPECT_TRUE(emcys(from).empty());
 }
 
+// 7.5.2.17 read at the send, not at the event (found in review): a message waiting for
+// the inhibit time 0x1015 when the master makes the EMCY invalid is not produced, and one
+// waiting while the COB-ID moves goes out on the new CAN-ID.
+TEST_F(EmcyTest, AnEmcyWaitingForItsInhibitTimeIsNotSentOnceTheCobIdIsInvalid) {
+  ASSERT_EQ(sdo_write(0x1015, 0, 1000, 2), 0u);  // 100 ms
+  emcy().report(0x6100, 1, {}, t);
+  emcy().report(0x6101, 1, {}, t);  // waits for the inhibit time
+  ASSERT_EQ(sdo_write(0x1014, 0, 0x80000085u), 0u);
+  const size_t from = sent.size();
+  advance_ms(300);
+  EXPECT_TRUE(emcys(from).empty());
+  ASSERT_EQ(sdo_write(0x1014, 0, 0x85), 0u);  // valid again: what was dropped stays dropped
+  advance_ms(300);
+  EXPECT_TRUE(emcys(from).empty());
+}
+
+TEST_F(EmcyTest, AnEmcyWaitingForItsInhibitTimeGoesOutOnTheNewCobId) {
+  ASSERT_EQ(sdo_write(0x1015, 0, 1000, 2), 0u);  // 100 ms
+  emcy().report(0x6100, 1, {}, t);
+  emcy().report(0x6101, 1, {}, t);  // waits
+  ASSERT_EQ(sdo_write(0x1014, 0, 0x80000095u), 0u);
+  ASSERT_EQ(sdo_write(0x1014, 0, 0x95), 0u);
+  const size_t from = sent.size();
+  advance_ms(300);
+  EXPECT_TRUE(emcys(from).empty());
+  const std::vector<CanFrame> moved = with_id(0x95, from);
+  ASSERT_EQ(moved.size(), 1u);
+  EXPECT_EQ(emcy_code(moved[0]), 0x6101);
+}
+
 TEST_F(EmcyTest, NoEmcyInStoppedTheQueueGoesOutInPreOperational) {
   nmt(0x02);
   size_t from = sent.size();
