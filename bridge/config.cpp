@@ -3,11 +3,13 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
 #include "config/toml_file.hpp"
 #include "od/cob_id.hpp"
+#include "od/communication_objects.hpp"
 
 namespace stepnode::bridge {
 namespace {
@@ -35,13 +37,43 @@ uint32_t parse_cob_id(const std::string& text, const std::string& what) {
   throw UsageError(what + ": '" + text + "' is not an 11-bit CAN-ID (1..0x7FF)");
 }
 
+// A node-ID as written: digits only, 1..127 ("5x" is no node).
+uint8_t parse_node(const std::string& text, const std::string& what) {
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos ||
+      text.size() > 3 || std::stoi(text) < 1 || std::stoi(text) > 127)
+    throw UsageError(what + ": node must be 1..127");
+  return static_cast<uint8_t>(std::stoi(text));
+}
+
+std::string hex(uint32_t cob_id) {
+  char text[8];
+  std::snprintf(text, sizeof text, "0x%X", cob_id);
+  return text;
+}
+
 void add_sdo_channel(BridgeConfig& cfg, const NodeSdoChannel& ch, const std::string& what) {
   if (ch.node < 1 || ch.node > 127) throw UsageError(what + ": node must be 1..127");
   if (ch.client_to_server == ch.server_to_client)
     throw UsageError(what + ": the two COB-IDs must differ");
-  for (const NodeSdoChannel& other : cfg.sdo_channels)
+  for (const uint32_t cob_id : {ch.client_to_server, ch.server_to_client}) {
+    // CiA 301 7.3.5: no SDO server channel takes them (the NMT, SYNC, TIME and the
+    // default channels' and heartbeats' IDs), so the node would refuse it.
+    if (od::is_restricted_can_id(cob_id))
+      throw UsageError(what + ": " + hex(cob_id) + " is a restricted CAN-ID (CiA 301 7.3.5)");
+    // The bridge decodes these as the SYNC and the TIME stamp.
+    if (cob_id == od::cob::kSync || cob_id == od::cob::kTimeStamp)
+      throw UsageError(what + ": " + hex(cob_id) + " is the " +
+                       (cob_id == od::cob::kSync ? "SYNC" : "TIME") + "'s CAN-ID");
+  }
+  for (const NodeSdoChannel& other : cfg.sdo_channels) {
     if (other.node == ch.node)
       throw UsageError(what + ": node " + std::to_string(ch.node) + " has a channel already");
+    // Two channels on one CAN-ID: the answers of one node would be taken for the other's.
+    for (const uint32_t cob_id : {ch.client_to_server, ch.server_to_client})
+      if (cob_id == other.client_to_server || cob_id == other.server_to_client)
+        throw UsageError(what + ": " + hex(cob_id) + " is node " + std::to_string(other.node) +
+                         "'s channel already");
+  }
   cfg.sdo_channels.push_back(ch);
 }
 
@@ -55,8 +87,7 @@ void load_sdo_channels(const config::TomlFile& file, BridgeConfig& cfg) {
     if (!ids || ids->size() != 2 || !ids->at(0).is_integer() || !ids->at(1).is_integer())
       throw UsageError(what + ": must be [CLIENT_TO_SERVER, SERVER_TO_CLIENT]");
     NodeSdoChannel ch;
-    ch.node = static_cast<uint8_t>(
-        std::clamp<int64_t>(std::atoll(std::string(key.str()).c_str()), 0, 255));
+    ch.node = parse_node(std::string(key.str()), what);
     auto cob_id = [&](const toml::node& n) {
       const int64_t v = *n.value<int64_t>();
       if (v < 1 || v > 0x7FF)
@@ -118,10 +149,7 @@ NodeSdoChannel parse_sdo_channel(const std::string& text) {
   if (colon == std::string::npos || comma == std::string::npos || comma < colon)
     throw UsageError(what + ": give NODE:CLIENT_TO_SERVER,SERVER_TO_CLIENT (e.g. 5:0x685,0x6C5)");
   NodeSdoChannel ch;
-  const std::string node = text.substr(0, colon);
-  if (node.empty() || node.find_first_not_of("0123456789") != std::string::npos || node.size() > 3)
-    throw UsageError(what + ": node must be 1..127");
-  ch.node = static_cast<uint8_t>(std::min(std::stoi(node), 255));
+  ch.node = parse_node(text.substr(0, colon), what);
   ch.client_to_server = parse_cob_id(text.substr(colon + 1, comma - colon - 1), what);
   ch.server_to_client = parse_cob_id(text.substr(comma + 1), what);
   return ch;

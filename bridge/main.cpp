@@ -75,6 +75,19 @@ int run(const bridge::BridgeConfig& cfg) {
     out.clear();
   };
 
+  // Frames the kernel dropped from the socket's full queue count in NodeHealth.bus_overruns;
+  // the log says so at most once a second (a flood would otherwise log every wake-up).
+  uint64_t lost_since_log = 0, last_log_us = 0;
+  auto note_socket_overruns = [&] {
+    lost_since_log += observer.on_socket_overruns(can.receive_overruns());
+    const uint64_t now = canio::EventLoop::now_us();
+    if (lost_since_log == 0 || now - last_log_us < 1'000'000) return;
+    spdlog::warn("{}: {} frames dropped from the full receive queue (bus_overruns)", cfg.iface,
+                 lost_since_log);
+    lost_since_log = 0;
+    last_log_us = now;
+  };
+
   canio::EventLoop loop;
   loop.stop_on_signals();
   loop.watch(can.fd(), [&] {
@@ -91,6 +104,7 @@ int run(const bridge::BridgeConfig& cfg) {
                             observer.on_frame(frame, canio::EventLoop::now_us(), out);
                             send_out();
                           });
+    note_socket_overruns();
     can.flush();
   });
   loop.every(uint64_t{cfg.tick_ms} * 1000, [&] {

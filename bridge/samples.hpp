@@ -111,6 +111,9 @@ struct BusCounters {
   uint64_t error_frames = 0;  // CAN error frames from the controller
   uint64_t error_passive = 0;
   uint64_t bus_off = 0;
+  // Frames lost before the bridge could decode them: the controller's receive or transmit
+  // overflows (error frames) and the frames the kernel dropped from the bridge's own
+  // socket queue when it was full (SO_RXQ_OVFL).
   uint64_t overruns = 0;
 };
 

@@ -83,10 +83,11 @@ struct BusObserver::Impl {
   std::array<uint64_t, kNodeIds> early_sdo_us{};
   // CAN-ID -> node, for the SDO channels of the bridge's own (config.sdo_channels).
   std::array<uint8_t, 0x800> sdo_channel_node{};
-  uint32_t random = 1;       // xorshift32 state for the collision jitter
-  TransferPacer pacer;       // the bridge's transfers on the whole bus (issue 13)
-  NetworkTime network_time;  // used with config.network_time
-  unsigned next_first = 1;   // the node the next round of starts begins with
+  uint32_t random = 1;           // xorshift32 state for the collision jitter
+  TransferPacer pacer;           // the bridge's transfers on the whole bus (issue 13)
+  NetworkTime network_time;      // used with config.network_time
+  unsigned next_first = 1;       // the node the next round of starts begins with
+  uint32_t socket_overruns = 0;  // the socket's running total when last told
 
   uint32_t next_random() {
     random ^= random << 13;
@@ -443,6 +444,14 @@ void BusObserver::on_tick(uint64_t now_us, uint64_t /*realtime_ns*/,
   }
   // After every timeout of this tick has freed its place.
   m.pump_round(now_us, out);
+}
+
+uint32_t BusObserver::on_socket_overruns(uint32_t socket_total) {
+  Impl& m = *impl_;
+  const uint32_t grown = socket_total - m.socket_overruns;  // the kernel's u32 wraps too
+  m.socket_overruns = socket_total;
+  m.counters.overruns += grown;
+  return grown;
 }
 
 void BusObserver::dispose_all() {

@@ -72,6 +72,9 @@ class BusObserver {
 
   // A frame from the bus; SDO requests the observer sends go to `out`.
   void on_frame(const ObservedFrame& received, uint64_t now_us, std::vector<od::CanFrame>& out);
+  // The socket's count of frames the kernel dropped from its full receive queue
+  // (SO_RXQ_OVFL, a running total): what it grew by counts as overruns. Returns that.
+  uint32_t on_socket_overruns(uint32_t socket_total);
   // Timers: SDO timeouts, retries, heartbeat loss, periodic NodeHealth.
   void on_tick(uint64_t now_us, uint64_t realtime_ns, std::vector<od::CanFrame>& out);
   // Shutdown: dispose every known node's axes.

@@ -127,5 +127,22 @@ TEST(BridgeConfig, BadSdoChannelsAreOneLine) {
   std::filesystem::remove(file);
 }
 
+// Found in review: a key that is no node-ID was read by its leading digits, and two nodes
+// could share a channel's CAN-ID (one node's answers then routed to the other).
+TEST(BridgeConfig, SdoChannelsNeedTheirOwnCanIdsAndRealNodeIds) {
+  auto file =
+      write_file("keychannels.toml", "iface = \"can0\"\n[sdo_channels]\n5x = [0x685, 0x6C5]\n");
+  EXPECT_EQ(error_of({"--config", file}),
+            "config " + file + ": sdo_channels.5x: node must be 1..127");
+  std::filesystem::remove(file);
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "5:0x685,0x6C5", "--sdo-channel",
+                      "6:0x686,0x6C5"}),
+            "--sdo-channel 6:0x686,0x6C5: 0x6C5 is node 5's channel already");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "6:0x606,0x6C6"}),
+            "--sdo-channel 6:0x606,0x6C6: 0x606 is a restricted CAN-ID (CiA 301 7.3.5)");
+  EXPECT_EQ(error_of({"--iface", "vcan0", "--sdo-channel", "6:0x686,0x080"}),
+            "--sdo-channel 6:0x686,0x080: 0x80 is the SYNC's CAN-ID");
+}
+
 }  // namespace
 }  // namespace stepnode::bridge

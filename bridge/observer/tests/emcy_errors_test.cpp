@@ -110,6 +110,18 @@ TEST(ErrorFrames, CountedByKind) {
   EXPECT_TRUE(out.empty());
 }
 
+// Frames the kernel dropped from the bridge's own full socket queue are lost as surely as a
+// controller overflow's (found in review: they were read from the socket and never counted).
+TEST(ErrorFrames, TheSocketsDroppedFramesCountAsOverruns) {
+  RecordingSink sink;
+  BusObserver obs(sink);
+  EXPECT_EQ(obs.on_socket_overruns(0), 0u);
+  EXPECT_EQ(obs.on_socket_overruns(7), 7u);
+  EXPECT_EQ(obs.on_socket_overruns(7), 0u);
+  EXPECT_EQ(obs.on_socket_overruns(10), 3u);
+  EXPECT_EQ(obs.counters().overruns, 10u);
+}
+
 }  // namespace
 }  // namespace stepnode::bridge::test
 
