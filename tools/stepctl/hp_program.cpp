@@ -185,9 +185,10 @@ std::vector<HpProgramCommand> parse_hp_command_string(const std::string& text) {
 }
 
 std::string hp_reset_words() {
-  // The power-on/reset state of 3-2. PSCALE before PROFILE: PROFILE FREQ values are in the
-  // units of the PSCALE in effect (3-9).
-  return "TRIG HOLD; HALT SGL; DISABLE INTR; PSCALE 1; PROFILE FREQ 0 250 500 50E-6; DELAY 0; "
+  // The power-on/reset state of 3-2. Interrupts off before HALT SGL stops a running motion:
+  // "all interrupts are disabled" at a reset, so its stop must raise none. PSCALE before
+  // PROFILE: PROFILE FREQ values are in the units of the PSCALE in effect (3-9).
+  return "TRIG HOLD; DISABLE INTR; HALT SGL; PSCALE 1; PROFILE FREQ 0 250 500 50E-6; DELAY 0; "
          "STANDBY AUTO HI; "
          "PULSE SS LO LO; HALT LO; HARDLIM LO LO; QSCALE 1; QINDEX OFF; TRIG AUTO";
 }

@@ -97,6 +97,11 @@ TEST(HpProgram, ListingRulesAndMistakes) {
   const auto reset = plan_hp_words(hp_reset_words(), 1);
   EXPECT_GT(reset.size(), 15u);
   EXPECT_EQ(reset.front().index, 0x2114);  // TRIG HOLD first: an armed command is cancelled
+  // 3-2: "all interrupts are disabled": before HALT SGL stops a motion, which an enabled
+  // channel would report as an interrupt (found in review).
+  const std::string words = hp_reset_words();
+  ASSERT_NE(words.find("DISABLE INTR"), std::string::npos);
+  EXPECT_LT(words.find("DISABLE INTR"), words.find("HALT SGL"));
 }
 
 }  // namespace
