@@ -29,6 +29,8 @@ struct GivenOnCommandLine {
   bool iface = false;
   bool node_id = false;
   bool state_dir = false;
+  bool tick_us = false;
+  bool log_level = false;
 };
 
 // node_id: 1..127, "none" (255, CiA 305's invalid node-ID): the node waits for an LSS
@@ -78,6 +80,14 @@ void load_profiles(const config::TomlFile& file, DeviceLayout& layout) {
   }
 }
 
+// A REAL64 as text that reads back as the same double (std::to_string keeps 6 decimals:
+// a PSCALE of 2.5e-6 became 3e-6).
+std::string shortest_text(double d) {
+  char text[32];
+  const auto [end, ec] = std::to_chars(text, text + sizeof text, d);
+  return std::string(text, end);
+}
+
 // [defaults]: "1017" = 500 or "1016:1" = 0x000101F4, kept as text for the object's type.
 void load_object_defaults(const config::TomlFile& file, NodeConfig& cfg) {
   const toml::table* defaults = file.table().get_as<toml::table>("defaults");
@@ -86,7 +96,7 @@ void load_object_defaults(const config::TomlFile& file, NodeConfig& cfg) {
     std::string text;
     if (auto i = value.value<int64_t>()) text = std::to_string(*i);
     else if (auto s = value.value<std::string>()) text = *s;
-    else if (auto d = value.value<double>()) text = std::to_string(*d);
+    else if (auto d = value.value<double>()) text = shortest_text(*d);
     else file.refuse("defaults." + std::string(key.str()), "must be an integer, number or string");
     cfg.object_defaults.emplace_back(std::string(key.str()), text);
   }
@@ -97,21 +107,29 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   const config::TomlFile file(path);
   if (auto iface = file.string("iface"); iface && !given.iface) cfg.iface = *iface;
   const bool id_set = load_node_id(file, cfg, given.node_id);
-  if (auto dir = file.string("state_dir"); dir && !given.state_dir) cfg.options.state_dir = *dir;
-  if (auto us = file.integer("tick_us", 100, 10'000'000)) cfg.tick_us = static_cast<uint64_t>(*us);
+  if (auto dir = file.string("state_dir"); dir && !given.state_dir) {
+    cfg.options.state_dir = *dir;
+    cfg.state_dir_given = true;
+  }
+  if (auto us = file.integer("tick_us", 100, 10'000'000); us && !given.tick_us)
+    cfg.tick_us = static_cast<uint64_t>(*us);
   if (auto us = file.integer("step_horizon_us", 0, 1'000'000))
     cfg.options.layout.step_horizon_us = static_cast<uint32_t>(*us);
-  if (auto n = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes)))
-    cfg.options.layout.axes = static_cast<unsigned>(*n);
+  const auto axes = file.integer("axes", 1, static_cast<int64_t>(kMaxAxes));
+  if (axes) cfg.options.layout.axes = static_cast<unsigned>(*axes);
   if (auto on = file.boolean("spm30_multiplexed")) {
     // SPM30 3-axis models: one register set and %Q1..%Q3 select one of three motors.
     cfg.options.layout.spm30_multiplexed = *on;
+    if (*on && axes && *axes != 1)
+      file.refuse("axes",
+                  "must be 1 (or left out) with spm30_multiplexed = true: the one "
+                  "register set selects one of its three motors");
     if (*on) cfg.options.layout.axes = 1;
   }
   load_profiles(file, cfg.options.layout);
   if (auto n = file.integer("serial_number", 0, 0xFFFFFFFFll))
     cfg.options.device.serial_number = static_cast<uint32_t>(*n);
-  if (auto level = file.string("log_level")) cfg.log_level = *level;
+  if (auto level = file.string("log_level"); level && !given.log_level) cfg.log_level = *level;
   if (auto on = file.boolean("apply_bit_timing")) cfg.apply_bit_timing = *on;
   // boot_listen_ms: listen for another device with the node-ID before the boot-up.
   if (auto ms = file.integer("boot_listen_ms", 0, kMaxBootListenMs))
@@ -121,6 +139,10 @@ bool load_config_file(const std::string& path, NodeConfig& cfg, GivenOnCommandLi
   if (auto on = file.boolean("self_start"))
     cfg.object_defaults.emplace_back("1F80", *on ? "0" : "4");
   load_object_defaults(file, cfg);
+  // A misspelt key ("nodeid", "[defualts]") would otherwise run the node on defaults.
+  file.refuse_unknown_keys({"iface", "node_id", "state_dir", "tick_us", "step_horizon_us", "axes",
+                            "spm30_multiplexed", "profiles", "serial_number", "log_level",
+                            "apply_bit_timing", "boot_listen_ms", "self_start", "defaults"});
   return id_set;
 }
 
@@ -190,6 +212,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   std::string node_id;
   std::string serial_number;
   int64_t boot_listen_ms = 0;
+  int64_t tick_us = 0;
   bool apply_bit_timing = false;
   app.add_option("--iface", cfg.iface, "SocketCAN interface, e.g. can0 or vcan0");
   app.add_option("--node-id", node_id,
@@ -201,7 +224,7 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
       "serial number in the identity object 0x1018 sub 4 (the LSS address), e.g. 7 or 0x1A2B");
   app.add_option("--config", config_file, "TOML config file (see README)");
   app.add_option("--state-dir", state_dir, "where stored parameters (0x1010) are kept");
-  app.add_option("--tick-us", cfg.tick_us,
+  app.add_option("--tick-us", tick_us,
                  "the longest the node sleeps between its deadlines, in microseconds "
                  "(100..10000000, default 1000000)");
   app.add_option("--log-level", cfg.log_level, "trace, debug, info, warn, error, off");
@@ -226,8 +249,9 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (!config_file.empty()) {
     // "--node-id none" gives no id: the config file's applies (after one stored over LSS).
     const bool id_given = id_known && node_id != "none" && node_id != "255";
-    id_known |=
-        load_config_file(config_file, cfg, {!cfg.iface.empty(), id_given, !state_dir.empty()});
+    id_known |= load_config_file(config_file, cfg,
+                                 {!cfg.iface.empty(), id_given, !state_dir.empty(),
+                                  app.count("--tick-us") > 0, app.count("--log-level") > 0});
   }
   if (app.count("--node-id")) apply_node_id_argument(node_id, cfg);
   if (app.count("--serial-number"))
@@ -235,10 +259,17 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   check_serial_numbers(cfg);
   if (apply_bit_timing) cfg.apply_bit_timing = true;  // over the file's
   if (app.count("--boot-listen-ms")) apply_boot_listen_argument(boot_listen_ms, cfg);
-  if (!state_dir.empty()) cfg.options.state_dir = state_dir;
-  if (cfg.options.state_dir == ".") cfg.options.state_dir = default_state_dir();
-  if (cfg.tick_us < 100 || cfg.tick_us > 10'000'000)
-    throw UsageError("--tick-us " + std::to_string(cfg.tick_us) + ": must be 100..10000000");
+  if (!state_dir.empty()) {
+    cfg.options.state_dir = state_dir;
+    cfg.state_dir_given = true;
+  }
+  // Only where none was given: "." given is the current directory.
+  if (!cfg.state_dir_given) cfg.options.state_dir = default_state_dir();
+  if (app.count("--tick-us")) {
+    if (tick_us < 100 || tick_us > 10'000'000)
+      throw UsageError("--tick-us " + std::to_string(tick_us) + ": must be 100..10000000");
+    cfg.tick_us = static_cast<uint64_t>(tick_us);
+  }
   static const char* levels[] = {"trace", "debug", "info", "warn", "error", "critical", "off"};
   if (std::find(std::begin(levels), std::end(levels), cfg.log_level) == std::end(levels))
     throw UsageError("--log-level " + cfg.log_level +
@@ -248,53 +279,6 @@ NodeConfig parse_command_line(int argc, char** argv, bool& exit_now, int& exit_c
   if (!id_known)
     throw UsageError("--node-id is required (1..127, or none for a node an LSS master configures)");
   return cfg;
-}
-
-std::vector<RefusedMapping> apply_object_defaults(
-    od::Dictionary& od, const std::vector<std::pair<std::string, std::string>>& defaults) {
-  // The built-in records of the mappings the file touches, to go back to.
-  std::map<uint16_t, std::map<uint8_t, od::Bytes>> built_in;
-  for (const auto& [key, text] : defaults) {
-    unsigned index = 0, sub = 0;
-    char extra = 0;
-    int n = std::sscanf(key.c_str(), "%x:%x%c", &index, &sub, &extra);
-    if (n < 1 || n > 2 || index > 0xFFFF || sub > 0xFF)
-      throw UsageError("defaults: '" + key +
-                       "' is not INDEX or INDEX:SUB in hex (e.g. \"1017\" or \"1016:1\")");
-    od::Entry* e = od.find(static_cast<uint16_t>(index), static_cast<uint8_t>(sub));
-    if (!e || !od::writable(e->access))
-      throw UsageError("defaults: object " + key + " does not exist or is not writable");
-    od::Bytes value;
-    try {
-      value = od::parse_value(e->type, text);
-    } catch (const std::invalid_argument& ex) {
-      throw UsageError("defaults: " + key + ": " + ex.what());
-    }
-    if (od::SdoAbort a = od::check_value(*e, value); a != od::SdoAbort::None)
-      throw UsageError(std::string("defaults: ")
-                           .append(key)
-                           .append(" = ")
-                           .append(text)
-                           .append(": ")
-                           .append(od::abort_text(a)));
-    const auto at = static_cast<uint16_t>(index);
-    if ((od::is_rpdo_mapping(at) || od::is_tpdo_mapping(at)) && !built_in.contains(at))
-      for (const auto& [sub_index, entry] : od.object(at)->entries)
-        built_in[at][sub_index] = entry.default_value;
-    e->default_value = value;
-    e->value = value;
-  }
-  std::vector<RefusedMapping> refused;
-  for (const auto& [index, record] : built_in) {
-    od::SdoAbort a = od::check_mapping_record(od, index);
-    if (a == od::SdoAbort::None) continue;
-    for (const auto& [sub, value] : record) {
-      od::Entry& e = od.object(index)->entries.at(sub);
-      e.default_value = e.value = value;
-    }
-    refused.push_back({index, a});
-  }
-  return refused;
 }
 
 }  // namespace stepnode::node

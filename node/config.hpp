@@ -21,6 +21,7 @@ struct NodeConfig {
   uint64_t tick_us =
       1'000'000;  // the longest the node sleeps (issue 13: it wakes for its deadlines)
   std::string log_level = "info";
+  bool state_dir_given = false;  // options.state_dir from --state-dir or state_dir, not the default
   // Object defaults from the config's [defaults] table: "1017" or "1016:1" -> value text.
   std::vector<std::pair<std::string, std::string>> object_defaults;
   bool print_eds = false;
