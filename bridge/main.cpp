@@ -16,6 +16,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bridge/config.hpp"
@@ -41,6 +42,24 @@ void block_stop_signals() {
   sigaddset(&set, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
 }
+
+// Frames the kernel dropped from the socket's full queue count in NodeHealth.bus_overruns;
+// the log says so at most once a second (a flood would otherwise log every wake-up).
+class OverrunLog {
+ public:
+  explicit OverrunLog(std::string iface) : iface_(std::move(iface)) {}
+  void note(uint64_t lost, uint64_t now_us) {
+    lost_ += lost;
+    if (lost_ == 0 || now_us - last_us_ < 1'000'000) return;
+    spdlog::warn("{}: {} frames dropped from the full receive queue (bus_overruns)", iface_, lost_);
+    lost_ = 0;
+    last_us_ = now_us;
+  }
+
+ private:
+  std::string iface_;
+  uint64_t lost_ = 0, last_us_ = 0;
+};
 
 int run(const bridge::BridgeConfig& cfg) {
   block_stop_signals();
@@ -75,19 +94,7 @@ int run(const bridge::BridgeConfig& cfg) {
     out.clear();
   };
 
-  // Frames the kernel dropped from the socket's full queue count in NodeHealth.bus_overruns;
-  // the log says so at most once a second (a flood would otherwise log every wake-up).
-  uint64_t lost_since_log = 0, last_log_us = 0;
-  auto note_socket_overruns = [&] {
-    lost_since_log += observer.on_socket_overruns(can.receive_overruns());
-    const uint64_t now = canio::EventLoop::now_us();
-    if (lost_since_log == 0 || now - last_log_us < 1'000'000) return;
-    spdlog::warn("{}: {} frames dropped from the full receive queue (bus_overruns)", cfg.iface,
-                 lost_since_log);
-    lost_since_log = 0;
-    last_log_us = now;
-  };
-
+  OverrunLog overruns(cfg.iface);
   canio::EventLoop loop;
   loop.stop_on_signals();
   loop.watch(can.fd(), [&] {
@@ -104,7 +111,7 @@ int run(const bridge::BridgeConfig& cfg) {
                             observer.on_frame(frame, canio::EventLoop::now_us(), out);
                             send_out();
                           });
-    note_socket_overruns();
+    overruns.note(observer.on_socket_overruns(can.receive_overruns()), canio::EventLoop::now_us());
     can.flush();
   });
   loop.every(uint64_t{cfg.tick_ms} * 1000, [&] {
