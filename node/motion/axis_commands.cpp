@@ -261,8 +261,16 @@ void Axis::write_commands(uint16_t bits, Tick now) {
   // still be stopped); while moving (any front end's job) only the stops.
   if (errors_) candidates &= command::kClearErrors | command::kDecelStop | command::kImmediateStop;
   else if (moving()) candidates &= command::kDecelStop | command::kImmediateStop;
+  // Several at once: the highest *legal* %Q is obeyed and the others ignored (SPM30 3.2). A
+  // command whose "Status Bits Required" are not met is not legal (MOVE ABSOLUTE needs %I9,
+  // RESUME MOVE %I10), so it outranks no legal one; with no legal one beside it, it is still
+  // obeyed as an Illegal Move (STP100 Table 4.2, %I4: "Previous commanded move was not
+  // possible").
+  uint16_t not_legal = 0;
+  if (!position_valid_) not_legal |= command::kMoveAbsolute;
+  if (!resumable_) not_legal |= command::kResumeMove;
+  if (candidates & ~not_legal) candidates &= static_cast<uint16_t>(~not_legal);
   if (candidates) {
-    // Several at once: the highest %Q wins (SPM30 3.2).
     uint16_t bit = std::bit_floor(candidates);
     // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability.
     if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move))
