@@ -133,8 +133,8 @@ void Axis::immediate_stop(Tick now) {
 void Axis::decelerate_and_stop(Tick now) {
   if (waiting_for_limit_release_) {
     waiting_for_limit_release_ = false;
-    core_.end_wait(*this);  // the job ends (motion_ended) at the next advance
-    resumable_ = true;      // nothing moved yet: the whole move can be resumed
+    core_.end_wait(*this);                    // the job ends (motion_ended) at the next advance
+    resumable_ = preempted_move_resumable();  // nothing moved yet: all of it is left
   } else if (core_.moving()) {
     core_.stop(now);
     // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
