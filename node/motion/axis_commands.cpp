@@ -123,8 +123,11 @@ void Axis::execute(uint16_t bit, Tick now) {
 }
 
 void Axis::immediate_stop(Tick now) {
-  // Whichever front end's job runs (README: the front ends' arbitration).
-  if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
+  // Whichever front end's job runs (README: the front ends' arbitration). "If the motor was
+  // moving" (SPM30 4 IMMEDIATE STOP, STP100 5.3.10) %I9 goes off: steps were going out, as
+  // the e-stop's rule has it (AxisCore::emergency_stop); a limit-started move still waiting
+  // for its limit's release sent none (STP100 5.3.4), so the position is still known.
+  if (core_.moving()) position_valid_ = false;
   core_.abort(this, now);
   waiting_for_limit_release_ = false;
   end_job(now);
