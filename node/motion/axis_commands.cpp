@@ -275,8 +275,13 @@ void Axis::write_commands(uint16_t bits, Tick now) {
   if (candidates & ~not_legal) candidates &= static_cast<uint16_t>(~not_legal);
   if (candidates) {
     uint16_t bit = std::bit_floor(candidates);
-    // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability.
-    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move))
+    // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability
+    // (SPM30 4 RESUME MOVE (3)). Selecting the selected axis is no command obeyed: SELECT AXIS
+    // "(1) If requested new axis is the same as the old axis or is illegal, do nothing" (an
+    // illegal one never got here; %Q1..%Q3 are bits 0..2).
+    const bool same_axis = bit == static_cast<uint16_t>(command::kSelectAxis1 << core_.selected());
+    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move) &&
+        !same_axis)
       resumable_ = false;
     execute(bit, now);
   }
