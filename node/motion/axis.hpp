@@ -140,6 +140,11 @@ class Axis final : public FrontEnd, public AxisListener {
   void jog(int direction, Tick now);
   void move(uint16_t command_bit, Tick now);
   void resume_move(Tick now);
+  // Whether the move a Decelerate and Stop ends is resumable: a Move Relative or Move Absolute
+  // "unless an error occurred" (SPM30 4 DECELERATE AND STOP, STP100 5.3.9); Move Indexed's
+  // "Status Bits Affected" have no %I10 (STP100 5.3.5), and Resume Move resumes "a previously
+  // pre-empted Relative Move or Absolute Move" (5.3.7).
+  bool preempted_move_resumable() const { return !errors_ && !move_indexed_; }
   void latch(uint16_t error_bits, Tick now);
   void latched(uint16_t error_bits, bool was_moving, Tick when);
   void notify(AxisEvent::Kind kind, uint16_t error_bits = 0);

@@ -123,8 +123,11 @@ void Axis::execute(uint16_t bit, Tick now) {
 }
 
 void Axis::immediate_stop(Tick now) {
-  // Whichever front end's job runs (README: the front ends' arbitration).
-  if (moving()) position_valid_ = false;  // SPM30 IMMEDIATE STOP
+  // Whichever front end's job runs (README: the front ends' arbitration). "If the motor was
+  // moving" (SPM30 4 IMMEDIATE STOP, STP100 5.3.10) %I9 goes off: steps were going out, as
+  // the e-stop's rule has it (AxisCore::emergency_stop); a limit-started move still waiting
+  // for its limit's release sent none (STP100 5.3.4), so the position is still known.
+  if (core_.moving()) position_valid_ = false;
   core_.abort(this, now);
   waiting_for_limit_release_ = false;
   end_job(now);
@@ -133,8 +136,8 @@ void Axis::immediate_stop(Tick now) {
 void Axis::decelerate_and_stop(Tick now) {
   if (waiting_for_limit_release_) {
     waiting_for_limit_release_ = false;
-    core_.end_wait(*this);  // the job ends (motion_ended) at the next advance
-    resumable_ = true;      // nothing moved yet: the whole move can be resumed
+    core_.end_wait(*this);                    // the job ends (motion_ended) at the next advance
+    resumable_ = preempted_move_resumable();  // nothing moved yet: all of it is left
   } else if (core_.moving()) {
     core_.stop(now);
     // SPM30 4 DECELERATE AND STOP: decelerate to base and stop. A Find Home ends there;
@@ -261,11 +264,24 @@ void Axis::write_commands(uint16_t bits, Tick now) {
   // still be stopped); while moving (any front end's job) only the stops.
   if (errors_) candidates &= command::kClearErrors | command::kDecelStop | command::kImmediateStop;
   else if (moving()) candidates &= command::kDecelStop | command::kImmediateStop;
+  // Several at once: the highest *legal* %Q is obeyed and the others ignored (SPM30 3.2). A
+  // command whose "Status Bits Required" are not met is not legal (MOVE ABSOLUTE needs %I9,
+  // RESUME MOVE %I10), so it outranks no legal one; with no legal one beside it, it is still
+  // obeyed as an Illegal Move (STP100 Table 4.2, %I4: "Previous commanded move was not
+  // possible").
+  uint16_t not_legal = 0;
+  if (!position_valid_) not_legal |= command::kMoveAbsolute;
+  if (!resumable_) not_legal |= command::kResumeMove;
+  if (candidates & ~not_legal) candidates &= static_cast<uint16_t>(~not_legal);
   if (candidates) {
-    // Several at once: the highest %Q wins (SPM30 3.2).
     uint16_t bit = std::bit_floor(candidates);
-    // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability.
-    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move))
+    // Any command but Resume (and the Decelerate-and-Stop that pre-empts) ends resumability
+    // (SPM30 4 RESUME MOVE (3)). Selecting the selected axis is no command obeyed: SELECT AXIS
+    // "(1) If requested new axis is the same as the old axis or is illegal, do nothing" (an
+    // illegal one never got here; %Q1..%Q3 are bits 0..2).
+    const bool same_axis = bit == static_cast<uint16_t>(command::kSelectAxis1 << core_.selected());
+    if (bit != command::kResumeMove && !(bit == command::kDecelStop && job_ == Job::Move) &&
+        !same_axis)
       resumable_ = false;
     execute(bit, now);
   }

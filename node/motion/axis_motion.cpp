@@ -111,8 +111,8 @@ void Axis::finish(Tick now) {
         start_move(repeat_distance_, move_ramp_, now, move_indexed_);
       return;
     }
-    // Stopped short by Decelerate and Stop: resumable unless an error came (SPM30 %Q15).
-    if (!errors_) resumable_ = true;
+    // Stopped short by Decelerate and Stop: resumable unless an error came or it was indexed.
+    if (preempted_move_resumable()) resumable_ = true;
   }
   notify(AxisEvent::MoveDone);
 }

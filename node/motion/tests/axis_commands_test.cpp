@@ -190,6 +190,49 @@ TEST_F(AxisCommands, Spm30_3_2_HighestCommandBitWinsWhenSeveralRiseTogether) {
   EXPECT_FALSE(any(status::kMoving));  // %Q8 lost, not deferred
 }
 
+// SPM30 3.2: "more than one legal %Q goes from OFF to ON in the same CPU sweep, the one with
+// the highest %Q number will be obeyed and the others will be ignored"; MOVE ABSOLUTE's
+// "Status Bits Required: ... %I9 must be ON for %Q9 command". With %I9 off %Q9 is not a legal
+// command: the %Q8 rising with it is obeyed and %Q9 ignored (no Illegal Move). Rising alone it
+// is still the Illegal Move it always was (STP100 Table 4.2, %I4: "Previous commanded move was
+// not possible").
+TEST_F(AxisCommands, Spm30_3_2_MoveAbsoluteWithoutI9DoesNotOutrankAMoveRelative) {
+  clear();
+  ASSERT_FALSE(has(status::kPositionValid));  // not valid after power-up (3.1)
+  axis->words().destination = 300;
+  issue(command::kMoveRelative | command::kMoveAbsolute);
+  EXPECT_EQ(errors(), 0);
+  EXPECT_TRUE(has(status::kMoving));
+  wait(5000);
+  EXPECT_EQ(mech(), 300);
+  issue(command::kMoveAbsolute);
+  EXPECT_EQ(errors(), status::kIllegalMove);
+  wait(1000);
+  EXPECT_EQ(mech(), 300);
+}
+
+// SPM30 3.2 as above, with RESUME MOVE's "Status Bits Required: ... %I10 must be ON": with
+// %I10 off the %Q8 rising with %Q10 is obeyed, and the highest *legal* one wins over several.
+TEST_F(AxisCommands, Spm30_3_2_ResumeWithoutI10DoesNotOutrankAMoveRelative) {
+  clear();
+  ASSERT_FALSE(has(status::kResumable));
+  axis->words().destination = 300;
+  issue(command::kMoveRelative | command::kResumeMove);
+  EXPECT_EQ(errors(), 0);
+  wait(5000);
+  EXPECT_EQ(mech(), 300);
+  // %I9 on, %I10 off: of %Q8, %Q9 and %Q10 the absolute move is the highest legal one.
+  set_position(0);
+  axis->words().destination = 200;
+  issue(command::kMoveRelative | command::kMoveAbsolute | command::kResumeMove);
+  EXPECT_EQ(errors(), 0);
+  wait(5000);
+  EXPECT_EQ(axis->motor_position(), 200);
+  EXPECT_EQ(mech(), 500);
+  issue(command::kResumeMove);  // alone: Illegal Move
+  EXPECT_EQ(errors(), status::kIllegalMove);
+}
+
 TEST_F(AxisCommands, Stp100_4_2_4_WhileMovingOnlyTheStopsAreObeyedAndIgnoredEdgesAreLost) {
   clear();
   set_position(0);
@@ -673,10 +716,14 @@ TEST_F(AxisCommands, Spm30_4_ResumeMove_RelativeMoveDownResumesDown) {
   EXPECT_EQ(mech(), -2000);
 }
 
+// RESUME MOVE (3): "Some command other than %Q10 is issued after the move is pre-empted".
+// Select Axis is none of them on one motor: SELECT AXIS "(1) If requested new axis is the same
+// as the old axis or is illegal, do nothing" (selecting another axis of a multiplexed one ends
+// it: axis_multiplexed_test.cpp).
 TEST_F(AxisCommands, Spm30_4_ResumeMove_LostOnAnyOtherCommand) {
   clear();
   for (uint16_t other : {command::kSetPosition, command::kDecelStop, command::kImmediateStop,
-                         command::kClearErrors, command::kMoveRelative, command::kSelectAxis1}) {
+                         command::kClearErrors, command::kMoveRelative}) {
     set_position(0);
     move_rel(4000);
     wait(800);

@@ -215,6 +215,39 @@ TEST_F(AxisIndexed, Stp100_5_3_5_DirGoesLowAtTheEndOfAnIndexedMoveWhateverEndedI
   }
 }
 
+// STP100 5.3.9 DECELERATE AND STOP: "If this command pre-empts a Move Relative or Move Absolute
+// command, the Pre-empted Move Resumable Status bit (%I10) is turned ON"; Move Indexed's
+// "Status Bits Affected" (5.3.5) have no %I10, and RESUME MOVE (5.3.7) resumes "a previously
+// pre-empted Relative Move or Absolute Move". A stopped indexed move is not resumable, also
+// one stopped while it waits for a limit's release (5.3.4).
+TEST_F(AxisIndexed, Stp100_5_3_9_DecelerateAndStopOfAnIndexedMoveIsNotResumable) {
+  indexed(10000, 700, 1000, 8000);
+  wait(1500);
+  ASSERT_TRUE(has(status::kMoving));
+  issue(command::kDecelStop);
+  walk();
+  ASSERT_FALSE(any(status::kMoving));
+  ASSERT_LT(mech(), 3000);  // short of the index and of the target
+  EXPECT_FALSE(has(status::kResumable));
+  issue(command::kResumeMove);
+  EXPECT_EQ(errors(), status::kIllegalMove);
+
+  AxisConfig c;
+  c.limit_started_moves = true;
+  sim::AxisMachineConfig m = machine();
+  m.upper_limit = 2000;
+  build(c, m);
+  motors[0].displace(2000);  // on the upper limit
+  wait(1);
+  indexed(10000, 700, 1000, 8000);
+  ASSERT_TRUE(has(status::kMoving));  // waiting for the limit's release
+  issue(command::kDecelStop);
+  EXPECT_FALSE(has(status::kResumable));
+  wait(1);
+  EXPECT_FALSE(any(status::kMoving | status::kResumable));
+  EXPECT_EQ(motors[0].pulses_received(), 0u);
+}
+
 TEST_F(AxisIndexed, Stp100_5_3_5_RelativeAndAbsoluteMovesLeaveDirAsItWas) {
   axis->words().destination = 100;
   issue(command::kMoveRelative);

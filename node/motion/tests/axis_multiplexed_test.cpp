@@ -191,6 +191,38 @@ TEST_F(AxisMultiplexed, Spm30_4_SelectAxis_IsACommandThatEndsResumability) {
   EXPECT_FALSE(has(status::kResumable));
 }
 
+// SPM30 4 SELECT AXIS: "(1) If requested new axis is the same as the old axis or is illegal,
+// do nothing." Nothing was done, so a pre-empted move stays resumable (RESUME MOVE (3) ends it
+// on "some command other than %Q10"), on a multiplexed axis and on one motor alike.
+TEST_F(AxisMultiplexed, Spm30_4_SelectAxis_TheSelectedAxisAgainDoesNothingAndKeepsI10) {
+  select(2);
+  move_rel(5000);
+  wait(800);
+  issue(command::kDecelStop);
+  finish();
+  ASSERT_TRUE(has(status::kResumable));
+  select(2);  // the same axis
+  EXPECT_TRUE(has(status::kResumable));
+  issue(command::kResumeMove);
+  finish();
+  EXPECT_EQ(errors(), 0);
+  EXPECT_EQ(motors[1].position(), 5000);
+
+  build({}, machine(), 1);
+  move_rel(5000);
+  wait(800);
+  issue(command::kDecelStop);
+  finish();
+  ASSERT_TRUE(has(status::kResumable));
+  select(2);  // illegal on one motor
+  select(1);  // the same axis
+  EXPECT_TRUE(has(status::kResumable));
+  issue(command::kResumeMove);
+  finish();
+  EXPECT_EQ(errors(), 0);
+  EXPECT_EQ(motors[0].position(), 5000);
+}
+
 TEST_F(AxisMultiplexed, Spm30_3_1_PowerUpSelectsAxis1AndForgetsTheOthers) {
   select(2);
   set_position(222);

@@ -232,6 +232,33 @@ TEST_F(AxisSafety, Stp100_5_3_4_WaitingMoveCanBeStoppedAndAwayMovesStartAtOnce) 
   hold(0);
 }
 
+// STP100 5.3.10 IMMEDIATE STOP: "If the motor was moving, the Current Position Valid Status bit
+// (%I9) is turned OFF". A limit-started move waiting for its limit's release shows %I16 (the
+// move is in progress) but "does not start until the End Limit input is deactivated" (5.3.4):
+// the motor is not moving, and %I9 stays on, as it does when the e-stop ends the same wait.
+TEST_F(AxisSafety, Stp100_5_3_10_ImmediateStopOfAWaitingLimitStartedMoveKeepsI9) {
+  AxisConfig c;
+  c.limit_started_moves = true;
+  build(c);
+  clear();
+  motors[0].displace(3000);  // on the upper limit
+  wait(1);
+  set_position(0);
+  move_rel(100);
+  ASSERT_TRUE(has(status::kMoving));
+  issue(command::kImmediateStop);
+  EXPECT_FALSE(any(status::kMoving));
+  EXPECT_TRUE(has(status::kPositionValid));
+  EXPECT_EQ(errors(), 0);
+  move_rel(100);
+  ASSERT_TRUE(has(status::kMoving));
+  estop = true;
+  wait(0);
+  EXPECT_EQ(errors(), status::kEmergencyStop);
+  EXPECT_TRUE(has(status::kPositionValid));
+  EXPECT_EQ(motors[0].pulses_received(), 0u);  // no pulse ever went out
+}
+
 TEST_F(AxisSafety, Stp100_5_3_4_WithoutTheOptionTheSameMoveIsALimitError) {
   clear();
   motors[0].displace(3000);
