@@ -119,7 +119,7 @@ void Channel::fire(Tick at) {
   }
   // STANDBY ON in pulse output: "When a MOVE or SUSTAIN command is executed and triggered,
   // the STBYn output goes low" (3-29, HI sense). A stepper's command under STANDBY ON was
-  // refused (error 94); one armed before a PROFILE FREQ does not power the motor.
+  // refused (error 94); the mode is the one the command was given under (Channel::profile).
   if (standby_ == StandbyMode::On) powered_ = profile_.mode == ProfileMode::Width;
   if (on_triggered) on_triggered(at);
   start_at_ = at + delay_ticks();  // DELAY: "all triggers are delayed" (3-14)
