@@ -92,7 +92,9 @@ Error Channel::pscale(double units_per_step) {
 Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
   if (blocking_) return accept(Error::AccessoryBusy);
   bool moving = run_ != Run::Idle || start_at_ || core_.busy();
-  // Power off under a move; but in pulse output STBY follows the pulse train (3-29).
+  // Power off under a move (or its DELAY: DONE? -2); but in pulse output STBY follows the
+  // pulse train (3-29). A command waiting for its trigger (DONE? -3) is not under way: the
+  // power goes, and the command meets error 94 when its trigger would start it (start()).
   if (mode == StandbyMode::On && moving && !pulse_train()) return accept(Error::AccessoryBusy);
   standby_ = mode;
   standby_high_ = sense_high;

@@ -1,7 +1,8 @@
 // An HP 44714A MOVE or SUSTAIN waiting for its trigger (DONE? -3) against what can change
 // before the trigger comes, each test named after the manual's page: the PROFILE's mode
-// (error 92 and the SUSTAIN's units, 3-3, 3-12). A waiting command never runs with its
-// value read in other units.
+// (error 92 and the SUSTAIN's units, 3-3, 3-12), STANDBY ON (error 94) and the TEST jumper
+// (error 93). A waiting command never runs with its value read in other units, nor pulses a
+// motor that cannot move.
 #include <gtest/gtest.h>
 
 #include "node/motion/tests/hp_channel_fixture.hpp"
@@ -84,6 +85,70 @@ TEST_F(HpChannel, Hp3_12_AWaitingSustainInSecondsMakesProfileFreqASettingsConfli
   EXPECT_EQ(done(), -1);
   ch->halt_sgl(now);
   EXPECT_TRUE(ch->stby_output_high());
+}
+
+// ---------------------------------------------------------------- STANDBY ON, the TEST jumper
+
+// Error 94 (3-3): "Motor cannot move when powered down by STANDBY in the ON mode"; STANDBY
+// "ON = remove power" (3-6). STANDBY ON while a MOVE waits is accepted and removes power at
+// once; the MOVE is refused with error 94 when its trigger would start it, and no pulse goes
+// out. DONE? keeps the last move's code: this one never started.
+TEST_F(HpChannel, Hp3_3_Error94_AWaitingMoveIsRefusedAtItsTriggerAfterStandbyOn) {
+  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
+  ASSERT_EQ(ch->move(20, false, /*nowait=*/true, now), Error::None);
+  ASSERT_EQ(ch->standby(StandbyMode::On, true, now), Error::None);
+  EXPECT_FALSE(ch->motor_powered());
+  EXPECT_EQ(done(), -3);
+  ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
+  EXPECT_EQ(ch->last_error(), Error::CannotMoveWhileStandbyOn);
+  wait(2000);
+  EXPECT_EQ(position(), 0);
+  EXPECT_EQ(ch->pulses(Output::Pstp) + ch->pulses(Output::Ndir), 0u);
+  EXPECT_DOUBLE_EQ(ch->pos_query(), 0.0);
+  EXPECT_FALSE(ch->motor_powered());
+  EXPECT_FALSE(axis->core().busy());
+  EXPECT_EQ(done(), 0);
+  EXPECT_EQ(ch->trig(TrigMode::Sgl, now), Error::NoActionDefined);  // nothing waits
+}
+
+// The same for a stepper's SUSTAIN waiting for the SYNC (TRIG SYS).
+TEST_F(HpChannel, Hp3_3_Error94_AWaitingSustainIsRefusedAtTheSyncAfterStandbyOn) {
+  ASSERT_EQ(ch->trig(TrigMode::Sys, now), Error::None);
+  ASSERT_EQ(ch->sustain(100, true, now), Error::None);
+  ASSERT_EQ(ch->standby(StandbyMode::On, true, now), Error::None);
+  ch->sync(now);
+  EXPECT_EQ(ch->last_error(), Error::CannotMoveWhileStandbyOn);
+  wait(1000);
+  EXPECT_EQ(position(), 0);
+  EXPECT_FALSE(axis->core().busy());
+  EXPECT_EQ(done(), 0);
+}
+
+// Error 93 (3-3): "Will not execute a MOVE or SUSTAIN command when test jumper is in the
+// 'TEST' position." The jumper is an input: set while a command waits for its trigger, or
+// during the trigger's DELAY, the command is refused with error 93 when it would start.
+TEST_F(HpChannel, Hp3_3_Error93_AWaitingCommandIsRefusedWhenTheTestJumperIsSet) {
+  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
+  ASSERT_EQ(ch->move(20, false, true, now), Error::None);
+  ch->set_test_jumper(true);
+  ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
+  EXPECT_EQ(ch->last_error(), Error::TestJumperSet);
+  wait(1000);
+  EXPECT_EQ(position(), 0);
+  EXPECT_FALSE(axis->core().busy());
+  ch->set_test_jumper(false);
+  // Set during the DELAY after the trigger.
+  ch->delay(100);
+  ASSERT_EQ(ch->sustain(100, true, now), Error::None);
+  ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
+  wait(50);
+  EXPECT_EQ(done(), -2);  // triggered, the DELAY running
+  ch->set_test_jumper(true);
+  wait(1000);
+  EXPECT_EQ(ch->last_error(), Error::TestJumperSet);
+  EXPECT_EQ(position(), 0);
+  EXPECT_FALSE(axis->core().busy());
+  EXPECT_EQ(done(), 0);
 }
 
 }  // namespace
