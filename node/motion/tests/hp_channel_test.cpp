@@ -772,6 +772,30 @@ TEST_F(HpChannel, QscaleQindexSglAndOnce) {
   EXPECT_EQ(ch->quadrature_count(), 2010);
 }
 
+// QINDEX ONCE (3-21): "The quadrature counter is reset when the command is executed but the
+// counter does not begin counting until the first index pulse is received"; "Indexing can be
+// turned off with the OFF option". OFF before any index pulse: the counter holds what it
+// counted (nothing; it showed the 30 counts it never counted) and counts from there on, as
+// with indexing OFF since power-on.
+TEST_F(HpChannel, QindexOnceThenOffBeforeTheIndexKeepsNoCountsItDidNotCount) {
+  sim::AxisMachineConfig m = plain();
+  m.encoder = sim::EncoderKind::Quadrature;  // one count per step
+  m.marker_offset = 1000;                    // no index pulse near 0
+  build(m);
+  ch->qindex(QIndexMode::Once);
+  ASSERT_EQ(ch->move(30, false, true, now), Error::None);
+  wait(2000);
+  ASSERT_EQ(position(), 30);
+  ASSERT_EQ(ch->quadrature_count(), 0);  // not counting yet
+  ch->qindex(QIndexMode::Off);
+  EXPECT_EQ(ch->qindex_mode(), QIndexMode::Off);
+  EXPECT_EQ(ch->quadrature_count(), 0);
+  EXPECT_DOUBLE_EQ(ch->qpos_query(), 0.0);
+  ASSERT_EQ(ch->move(-10, false, true, now), Error::None);
+  wait(2000);
+  EXPECT_EQ(ch->quadrature_count(), -10);
+}
+
 TEST_F(HpChannel, QuadratureCounterRollsOverAt32Bits) {
   sim::AxisMachineConfig m = plain();
   m.encoder = sim::EncoderKind::Quadrature;
