@@ -39,7 +39,7 @@ enum class Conflict : uint8_t {
   None = 0,
   SlopeZeroRangeUnattainable = 1,  // "slope = 0; min-to-max ... range unattainable"
   MinZeroSlopeZero = 2,            // "min = 0; slope = 0; no pulses can be generated"
-  AllZero = 3,                     // "min = max = slope = 0; no pulses can be generated"
+  AllZero = 3,                     // "min = max = slope = 0; no pulses ...", any slope
   WidthVersusPeriod = 4,           // FREQ: pwidth > period of max; WIDTH: period < max width
   MinAboveMax = 5,                 // "min > max"
   OutOfRange = 6,
