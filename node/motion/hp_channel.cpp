@@ -68,6 +68,17 @@ Conflict Channel::profile(const Profile& given, Tick now, Error* error) {
     hz.slope /= s;
   }
   last_conflict_ = check_profile(hz);
+  // The mode cannot change under a MOVE or SUSTAIN waiting for its trigger (DONE? -3): it
+  // was given under the mode in effect, and the mode is what it means. A waiting MOVE would
+  // become one that "cannot be executed when the PROFILE command is in the width mode"
+  // (error 92, 3-3); a waiting SUSTAIN's value is "The frequency of pulses in Hz (PROFILE in
+  // FREQ mode)" or "The pulse width in seconds (PROFILE in WIDTH mode)" (3-12), and would
+  // run read in the other unit. The PROFILE is refused, as parameters "which conflict"
+  // (3-9, 3-26), rather than the waiting command at its trigger: the manual has no error a
+  // SUSTAIN could get for its units, and the refusal comes with the command that made the
+  // conflict. TRIG HOLD cancels the waiting command first (3-13 NOTE).
+  if (last_conflict_ == Conflict::None && armed_ && hz.mode != profile_.mode)
+    last_conflict_ = Conflict::ModeVersusWaitingCommand;
   if (last_conflict_ == Conflict::None) profile_ = hz;
   return last_conflict_;
 }
@@ -81,7 +92,9 @@ Error Channel::pscale(double units_per_step) {
 Error Channel::standby(StandbyMode mode, bool sense_high, Tick now) {
   if (blocking_) return accept(Error::AccessoryBusy);
   bool moving = run_ != Run::Idle || start_at_ || core_.busy();
-  // Power off under a move; but in pulse output STBY follows the pulse train (3-29).
+  // Power off under a move (or its DELAY: DONE? -2); but in pulse output STBY follows the
+  // pulse train (3-29). A command waiting for its trigger (DONE? -3) is not under way: the
+  // power goes, and the command meets error 94 when its trigger would start it (start()).
   if (mode == StandbyMode::On && moving && !pulse_train()) return accept(Error::AccessoryBusy);
   standby_ = mode;
   standby_high_ = sense_high;

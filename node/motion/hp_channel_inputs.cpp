@@ -46,6 +46,11 @@ void Channel::halt_input_changed(Tick now) {
 void Channel::qindex(QIndexMode mode) {
   switch (mode) {
     case QIndexMode::Off:
+      // "Indexing can be turned off with the OFF option" (3-21): the counter counts, as at
+      // power-on. Turned off before ONCE's index pulse, it holds what it counted since
+      // ONCE's reset, nothing, and counts from now: the encoder's counts while it waited
+      // were never counted.
+      if (q_frozen_) q_offset_ = core_.motor().encoder_count();
       q_waiting_for_index_ = false;
       q_frozen_ = false;
       break;

@@ -55,7 +55,7 @@ void Channel::start_sustain_rate(double rate, Tick at) {
   int dir = rate > 0 ? +1 : -1;
   double target = clamp_to_profile(profile_, std::fabs(rate));
   // Checked when given, and again now: a PROFILE given while it waited for its trigger
-  // may have moved the clamp below the rate resolution (a 0 maximum).
+  // may have moved the clamp below the rate resolution (a 0 minimum under SUSTAIN 1E-12).
   if (below_rate_resolution(rate)) return;
   sustain_reached_ = false;
   if (run_ == Run::Sustain) {

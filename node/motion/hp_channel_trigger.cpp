@@ -118,8 +118,9 @@ void Channel::fire(Tick at) {
     idle_since_.reset();
   }
   // STANDBY ON in pulse output: "When a MOVE or SUSTAIN command is executed and triggered,
-  // the STBYn output goes low" (3-29, HI sense). A stepper's command under STANDBY ON was
-  // refused (error 94); one armed before a PROFILE FREQ does not power the motor.
+  // the STBYn output goes low" (3-29, HI sense). A stepper's command under STANDBY ON is
+  // refused (error 94, when given or at its start) and leaves the motor unpowered; the mode
+  // is the one the command was given under (Channel::profile).
   if (standby_ == StandbyMode::On) powered_ = profile_.mode == ProfileMode::Width;
   if (on_triggered) on_triggered(at);
   start_at_ = at + delay_ticks();  // DELAY: "all triggers are delayed" (3-14)
@@ -130,6 +131,19 @@ void Channel::start(Tick at) {
   start_at_.reset();
   Pending p = pending_;
   pending_ = Pending{};
+  // Checked when given, and again now that it would move the motor: STANDBY ON and the
+  // TEST jumper may have changed while it waited for its trigger (the jumper also during
+  // the DELAY). STANDBY ON is accepted then ("ON = remove power", 3-6; nothing moves while
+  // a command waits); error 94 is the move's: "Motor cannot move when powered down by
+  // STANDBY in the ON mode" (3-3), so it applies when the motor would move. The jumper is
+  // an input: "Will not execute a MOVE or SUSTAIN command when test jumper is in the TEST
+  // position" (93). The command is dropped with its error number (0x2n19); DONE? keeps the
+  // last move's code, as for a command refused when given. (92 cannot arise here: the mode
+  // does not change under a waiting command, Channel::profile.) SUSTAIN 0 only stops.
+  const bool moves = p.action == Action::Move || (p.action == Action::Sustain && p.rate != 0);
+  if (moves)
+    if (Error e = check_can_move(p.action == Action::Sustain); e != Error::None)
+      return (void)accept(e);
   if (p.action == Action::Move) return start_move_steps(p.steps, at);
   if (p.action == Action::Sustain) return start_sustain_rate(p.rate, at);
 }

@@ -26,7 +26,11 @@ Conflict check_profile(const Profile& p) {
   auto finer_than_resolution = [&](double v) { return v > 0 && v < resolution; };
   if (finer_than_resolution(p.min) || finer_than_resolution(p.max)) return Conflict::OutOfRange;
   if (p.min > p.max) return Conflict::MinAboveMax;
-  if (p.min == 0 && p.max == 0 && p.slope == 0) return Conflict::AllZero;
+  // Rows 2 and 3 are conflicts because "no pulses can be generated". With min = max = 0 none
+  // can whatever the slope: "You cannot operate at a frequency less than min or greater
+  // than max" (3-8), and a width of 0 is no pulse. Row 3, whose reason it is (a MOVE under
+  // PROFILE FREQ 0 0 500 never sent a pulse and never ended).
+  if (p.min == 0 && p.max == 0) return Conflict::AllZero;
   if (p.min == 0 && p.slope == 0) return Conflict::MinZeroSlopeZero;
   if (p.slope == 0 && p.min < p.max) return Conflict::SlopeZeroRangeUnattainable;
   if (freq) {

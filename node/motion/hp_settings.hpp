@@ -33,14 +33,17 @@ enum class Error : uint8_t {
 
 // Which row of the PROFILE settings-conflict tables (3-9 FREQ, 3-26 WIDTH) a PROFILE hit.
 // OutOfRange: outside the module's specifications (appendix A), not a table row.
+// ModeVersusWaitingCommand: not a table row either; a PROFILE of the other mode while a
+// MOVE or SUSTAIN waits for its trigger (Channel::profile says why).
 enum class Conflict : uint8_t {
   None = 0,
   SlopeZeroRangeUnattainable = 1,  // "slope = 0; min-to-max ... range unattainable"
   MinZeroSlopeZero = 2,            // "min = 0; slope = 0; no pulses can be generated"
-  AllZero = 3,                     // "min = max = slope = 0; no pulses can be generated"
+  AllZero = 3,                     // "min = max = slope = 0; no pulses ...", any slope
   WidthVersusPeriod = 4,           // FREQ: pwidth > period of max; WIDTH: period < max width
   MinAboveMax = 5,                 // "min > max"
   OutOfRange = 6,
+  ModeVersusWaitingCommand = 7,
 };
 
 enum class ProfileMode : uint8_t { Freq = 0, Width = 1 };

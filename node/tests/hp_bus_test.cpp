@@ -2,7 +2,7 @@
 // virtual time (every command an SDO write, every query an SDO read, the interrupt as TPDO
 // 4 and EMCY): Figure 3-3 "Sending Pulses To a Motor", the interrupt example (3-16), the
 // PSCALE round-off examples (3-10), the PROFILE conflicts and error numbers as aborts, and
-// TRIG SYS on a SYNC frame.
+// TRIG SYS on a SYNC frame (with what changed while the MOVE waited for it).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -337,6 +337,28 @@ TEST_F(HpBus, TrigSysStartsAtTheSyncFramesArrivalNotWhenItWasRead) {
             static_cast<uint32_t>(t - 700));
   wait_s(1);
   EXPECT_EQ(mechanical(), 5);
+}
+
+// A MOVE waiting for the SYNC (TRIG SYS): PROFILE WIDTH meanwhile is a settings conflict
+// (0x2n1A 7: the mode of a waiting command); STANDBY ON is accepted, and at the SYNC the
+// MOVE is refused with error 94, "Motor cannot move when powered down by STANDBY in the ON
+// mode" (3-3): 0x2n19 and TPDO 4 carry it, and the motor does not move.
+TEST_F(HpBus, AMoveWaitingForTheSyncKeepsItsModeAndMeetsError94AtTheSync) {
+  ASSERT_EQ(trig(3), 0u);
+  ASSERT_EQ(move(20, false, true), 0u);
+  EXPECT_EQ(done(), -3);
+  EXPECT_EQ(profile(1, 1e-3, 10e-3, 5e-3, 20e-3), kIncompatible);
+  EXPECT_EQ(*sdo_read(index(0, kConflict), 0), 7u);
+  ASSERT_EQ(sdo_write(index(0, kOutput), hp44714a::output_sub::kStandbyMode, 1, 1), 0u);
+  size_t from = sent.size();
+  sync();
+  wait_s(1);
+  EXPECT_EQ(error(), 94);
+  EXPECT_EQ(done(), 0);
+  EXPECT_EQ(mechanical(), 0);
+  auto tpdos = with_id(kTpdo4, from);
+  ASSERT_FALSE(tpdos.empty());
+  EXPECT_EQ(tpdos.back().data[1], 94);
 }
 
 TEST_F(HpBus, StoredSettingsComeBackAfterResetNode) {

@@ -285,6 +285,7 @@ std::string hp_conflict_text(unsigned row) {
     case 4: return "pulse width larger than the period of max (FREQ) / period < max width (WIDTH)";
     case 5: return "min > max";
     case 6: return "outside the module's specifications (appendix A)";
+    case 7: return "mode change while a MOVE or SUSTAIN waits for its trigger";
     default: return "unknown conflict";
   }
 }

@@ -71,6 +71,23 @@ TEST_F(HpChannel, ProfileFreqSettingConflictsAreTheTablesRows) {
   EXPECT_EQ(ch->profile(width(1e-6, 10e-6, 1e-6, .1e-3), now), Conflict::None);
 }
 
+// 3-8: "You cannot operate at a frequency less than min or greater than max"; rows 2 and 3 of
+// the conflict tables (3-9, 3-26) are settings conflicts because "no pulses can be
+// generated". With min = max = 0 none can whatever the slope (a MOVE under PROFILE FREQ 0 0
+// 500 never sent a pulse and never ended): row 3. The same for widths.
+TEST_F(HpChannel, AZeroMinimumAndMaximumWithASlopeIsASettingsConflict) {
+  EXPECT_EQ(ch->profile(freq(0, 0, 500, 50e-6), now), Conflict::AllZero);
+  EXPECT_EQ(ch->last_conflict(), Conflict::AllZero);
+  EXPECT_EQ(ch->profile(width(0, 0, 1e-3, .1e-3), now), Conflict::AllZero);
+  // The profile in effect is still the power-on one, and a MOVE under it ends.
+  EXPECT_EQ(ch->active_profile().mode, ProfileMode::Freq);
+  EXPECT_EQ(ch->active_profile().max, 250);
+  ASSERT_EQ(ch->move(10, false, true, now), Error::None);
+  wait(2000);
+  EXPECT_EQ(position(), 10);
+  EXPECT_EQ(done(), 0);
+}
+
 TEST_F(HpChannel, AppendixAPulseRateResolutionAndMaximumBoundTheRates) {
   // "Pulse Rate: maximum 10 kHz, resolution 2.5 µHz". A FREQ min or max above 0 but finer
   // than the resolution is out of range, as is a WIDTH period under 100 µs (above 10 kHz).
@@ -163,12 +180,14 @@ TEST_F(HpChannel, AMoveLongerThanTheEnginesClockIsRefused) {
 }
 
 TEST_F(HpChannel, AnArmedSustainIsCheckedAgainWhenItFires) {
-  // SUSTAIN 100 NOWAIT under TRIG HOLD, then PROFILE with a 0 maximum, then TRIG SGL: the
-  // clamp leaves 0 Hz, which never reaches the engine.
+  // SUSTAIN 1E-12 NOWAIT under TRIG HOLD is accepted with a 100 Hz minimum (it runs at min),
+  // then PROFILE with a 0 minimum, then TRIG SGL: the clamp leaves 1E-12 Hz, finer than the
+  // 2.5 uHz resolution, which never reaches the engine.
+  ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
   ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
-  ASSERT_EQ(ch->sustain(100, true, now), Error::None);
+  ASSERT_EQ(ch->sustain(1e-12, true, now), Error::None);
   EXPECT_EQ(done(), -3);
-  ASSERT_EQ(ch->profile(freq(0, 0, 500, 25e-6), now), Conflict::None);
+  ASSERT_EQ(ch->profile(freq(0, 800, 200, 25e-6), now), Conflict::None);
   ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
   wait(1000);
   EXPECT_EQ(position(), 0);
@@ -770,6 +789,30 @@ TEST_F(HpChannel, QscaleQindexSglAndOnce) {
   ASSERT_EQ(ch->move(2000, false, true, now), Error::None);  // through the next marker
   wait(20000);
   EXPECT_EQ(ch->quadrature_count(), 2010);
+}
+
+// QINDEX ONCE (3-21): "The quadrature counter is reset when the command is executed but the
+// counter does not begin counting until the first index pulse is received"; "Indexing can be
+// turned off with the OFF option". OFF before any index pulse: the counter holds what it
+// counted (nothing; it showed the 30 counts it never counted) and counts from there on, as
+// with indexing OFF since power-on.
+TEST_F(HpChannel, QindexOnceThenOffBeforeTheIndexKeepsNoCountsItDidNotCount) {
+  sim::AxisMachineConfig m = plain();
+  m.encoder = sim::EncoderKind::Quadrature;  // one count per step
+  m.marker_offset = 1000;                    // no index pulse near 0
+  build(m);
+  ch->qindex(QIndexMode::Once);
+  ASSERT_EQ(ch->move(30, false, true, now), Error::None);
+  wait(2000);
+  ASSERT_EQ(position(), 30);
+  ASSERT_EQ(ch->quadrature_count(), 0);  // not counting yet
+  ch->qindex(QIndexMode::Off);
+  EXPECT_EQ(ch->qindex_mode(), QIndexMode::Off);
+  EXPECT_EQ(ch->quadrature_count(), 0);
+  EXPECT_DOUBLE_EQ(ch->qpos_query(), 0.0);
+  ASSERT_EQ(ch->move(-10, false, true, now), Error::None);
+  wait(2000);
+  EXPECT_EQ(ch->quadrature_count(), -10);
 }
 
 TEST_F(HpChannel, QuadratureCounterRollsOverAt32Bits) {

@@ -68,22 +68,6 @@ TEST_F(HpChannel, Hp3_29_StandbyOnGivenDuringAPulseTrainFollowsIt) {
   EXPECT_TRUE(ch->stby_output_high());
 }
 
-// Only pulse output is powered under STANDBY ON: a WIDTH SUSTAIN armed, then PROFILE FREQ
-// (a stepper again) before its trigger, fires without powering the motor.
-TEST_F(HpChannel, Hp3_29_StandbyOnPowersOnlyAPulseOutputTrain) {
-  ASSERT_EQ(ch->profile(width(1e-3, 10e-3, 5e-3, 20e-3), now), Conflict::None);
-  ASSERT_EQ(ch->standby(StandbyMode::On, true, now), Error::None);
-  ASSERT_EQ(ch->trig(TrigMode::Hold, now), Error::None);
-  ASSERT_EQ(ch->sustain(2e-3, true, now), Error::None);
-  ASSERT_EQ(ch->profile(freq(100, 800, 200, 25e-6), now), Conflict::None);
-  ASSERT_EQ(ch->trig(TrigMode::Sgl, now), Error::None);
-  EXPECT_FALSE(ch->pulses_reach_powered_motor());
-  EXPECT_TRUE(ch->stby_output_high());
-  wait(100);
-  EXPECT_FALSE(ch->pulses_reach_powered_motor());
-  ch->halt_sgl(now);
-}
-
 // ---------------------------------------------------------------- min/max (3-8, 3-12)
 
 // 3-8 says "A specified frequency not within the min/max window will cause an error"; the

@@ -136,6 +136,7 @@ TEST(HpWords, TextsAreTheManuals) {
   EXPECT_EQ(hp_error_text(91), "MUST STOP TO CHANGE DIRECTION");
   EXPECT_EQ(hp_done_text(-3), "waiting for trigger");
   EXPECT_EQ(hp_conflict_text(5), "min > max");
+  EXPECT_EQ(hp_conflict_text(7), "mode change while a MOVE or SUSTAIN waits for its trigger");
 }
 
 }  // namespace
