@@ -32,6 +32,7 @@ class Channel final : public FrontEnd, public AxisListener {
   // ---- set-up commands
   Conflict profile(const Profile& given, Tick now, Error* error = nullptr);
   Error pscale(double units_per_step);
+  double pscale_value() const { return position_.scale(); }
   void delay(uint16_t ms) { delay_ms_ = ms; }
   Error standby(StandbyMode mode, bool sense_high, Tick now);
   void pulse(const PulseSetup& setup) { pulse_ = setup; }

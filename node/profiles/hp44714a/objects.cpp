@@ -88,6 +88,11 @@ void add_channel(od::Dictionary& od, unsigned a) {
   limits<uint8_t>(
       command(prof.add(profile_sub::kApply, "Apply (write 1)", DT::Unsigned8, AC::ReadWrite, {0})),
       0, 1);
+  // FREQ values are in units of the PSCALE in effect when PROFILE is given (3-9): the one the
+  // profile in effect was given at, stored with it, so a restart gives it at that PSCALE.
+  prof.add(profile_sub::kGivenAtPscale, "PSCALE the profile was given at", DT::Real64, AC::ReadOnly,
+           encode<double>(1.0))
+      .persistent = true;
 
   od.var(index(a, kPscale), name(a, "PSCALE units per step"), DT::Real64, AC::ReadWrite,
          encode<double>(1.0));

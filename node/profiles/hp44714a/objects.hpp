@@ -39,7 +39,8 @@ inline uint16_t sim_index(unsigned axis) {
 }  // namespace obj
 
 namespace profile_sub {
-constexpr uint8_t kMode = 1, kMin = 2, kMax = 3, kSlope = 4, kLast = 5, kApply = 6;
+constexpr uint8_t kMode = 1, kMin = 2, kMax = 3, kSlope = 4, kLast = 5, kApply = 6,
+                  kGivenAtPscale = 7;
 }
 namespace move_sub {
 constexpr uint8_t kRelative = 1, kAbsolute = 2, kNowait = 3;

@@ -99,7 +99,9 @@ void HpService::install_command_hooks(unsigned a) {
     hp::Error e = hp::Error::None;
     hp::Conflict c = ch.profile(prof, now(), &e);
     if (e != hp::Error::None) return result(a, e);
-    return c == hp::Conflict::None ? SdoAbort::None : SdoAbort::ParameterIncompatible;
+    if (c != hp::Conflict::None) return SdoAbort::ParameterIncompatible;
+    dictionary_.put<double>(p, hp44714a::profile_sub::kGivenAtPscale, ch.pscale_value());
+    return SdoAbort::None;
   });
   hook(kPscale, 0, [this, a, &ch](std::span<const uint8_t> d) {
     double s = real(d);
@@ -242,9 +244,13 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
   hp::Channel& ch = *channels_[a];
   uint16_t p = index(a, kProfile), out = index(a, kOutput), lim = index(a, kLimits);
   auto g8 = [&](uint16_t i, uint8_t s) { return dictionary_.get<uint8_t>(i, s); };
-  // The stored PROFILE is given before the stored PSCALE (the order of Figure 3-3). One the
-  // channel refuses (stored by a build with other limits) leaves the power-on profile, and
-  // its objects show that one again; EMCY 0x5530 says a stored value was refused.
+  // The stored PROFILE is given at the PSCALE it was given at (its FREQ values are in that
+  // PSCALE's units, 3-9), then the stored PSCALE: "PSCALE 0.5; PROFILE FREQ 100 ..." runs
+  // at 200 pulses/s again after a restart (it ran at 100: found in review). One the channel
+  // refuses (stored by a build with other limits) leaves the power-on profile, and its
+  // objects show that one again; EMCY 0x5530 says a stored value was refused.
+  const double at = dictionary_.get<double>(p, hp44714a::profile_sub::kGivenAtPscale);
+  if (at != 0 && std::isfinite(at)) ch.pscale(at);
   hp::Conflict c =
       ch.profile(hp::Profile{static_cast<hp::ProfileMode>(g8(p, hp44714a::profile_sub::kMode)),
                              dictionary_.get<double>(p, hp44714a::profile_sub::kMin),
@@ -258,6 +264,7 @@ void HpService::apply_stored(unsigned a, motion::Tick t) {
         "applies",
         a, static_cast<int>(c));
     dictionary_.reset_to_defaults(p, p);
+    ch.pscale(1.0);  // the power-on profile is in pulses/s
     emcy_.report(emcy_code::kDataStorage, error_bits::kGeneric,
                  {static_cast<uint8_t>(p), static_cast<uint8_t>(p >> 8), 0, 1, 0}, axes_.now_us());
   }
