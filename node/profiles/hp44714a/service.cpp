@@ -190,7 +190,10 @@ void HpService::install_counter_hooks(unsigned a) {
     this->hook(a, offset, sub, std::move(f));
   };
   hook(kPosition, 0, [this, a, &ch](std::span<const uint8_t> d) {
-    return std::isfinite(real(d)) ? result(a, ch.pos(real(d))) : SdoAbort::InvalidValue;
+    // "This value can be any number from -2,147,483,648 to +2,147,483,647 specified in the
+    // units of the PSCALE command" (3-18): outside it a range abort, as for a MOVE.
+    const double v = real(d);
+    return v >= -2147483648.0 && v <= 2147483647.0 ? result(a, ch.pos(v)) : SdoAbort::InvalidValue;
   });
   od.at(index(a, kPosition), 0).on_read = [&ch](od::Bytes& v) {
     v = od::encode<double>(ch.pos_query());
