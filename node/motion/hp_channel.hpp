@@ -33,6 +33,11 @@ class Channel final : public FrontEnd, public AxisListener {
   Conflict profile(const Profile& given, Tick now, Error* error = nullptr);
   Error pscale(double units_per_step);
   double pscale_value() const { return position_.scale(); }
+  // A command that only sets a parameter (DELAY, PULSE, HARDLIM, QSCALE, QINDEX, ENABLE and
+  // DISABLE INTR): error 89 while a MOVE or SUSTAIN without NOWAIT runs ("must complete the
+  // MOVE or SUSTAIN command before the next command is recognized", 3-13 note 1), else
+  // accepted (0x2n19 = 0). The caller carries it out only when accepted.
+  Error setting_command() { return accept(blocking_ ? Error::AccessoryBusy : Error::None); }
   void delay(uint16_t ms) { delay_ms_ = ms; }
   Error standby(StandbyMode mode, bool sense_high, Tick now);
   void pulse(const PulseSetup& setup) { pulse_ = setup; }

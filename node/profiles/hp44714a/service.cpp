@@ -129,7 +129,8 @@ void HpService::install_command_hooks(unsigned a) {
   dictionary_.at(index(a, kTrig), 0).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(static_cast<uint8_t>(ch.trig_mode()));
   };
-  hook(kDelay, 0, [&ch](std::span<const uint8_t> d) {
+  hook(kDelay, 0, [this, a, &ch](std::span<const uint8_t> d) {
+    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
     ch.delay(od::decode<uint16_t>(d));
     return SdoAbort::None;
   });
@@ -156,7 +157,8 @@ void HpService::install_output_hooks(unsigned a) {
        });
   for (uint8_t sub : {hp44714a::output_sub::kPulseMode, hp44714a::output_sub::kPstpSense,
                       hp44714a::output_sub::kNdirSense})
-    hook(kOutput, sub, [this, out, sub, &ch](std::span<const uint8_t> d) {
+    hook(kOutput, sub, [this, a, out, sub, &ch](std::span<const uint8_t> d) {
+      if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(out, s); };
       ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(hp44714a::output_sub::kPulseMode)),
                               get(hp44714a::output_sub::kPstpSense) != 0,
@@ -165,7 +167,8 @@ void HpService::install_output_hooks(unsigned a) {
     });
   uint16_t lim = index(a, kLimits);
   for (uint8_t sub : {hp44714a::limits_sub::kPlimSense, hp44714a::limits_sub::kNlimSense})
-    hook(kLimits, sub, [this, lim, sub, &ch](std::span<const uint8_t> d) {
+    hook(kLimits, sub, [this, a, lim, sub, &ch](std::span<const uint8_t> d) {
+      if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(lim, s); };
       ch.hardlim(get(hp44714a::limits_sub::kPlimSense) != 0,
                  get(hp44714a::limits_sub::kNlimSense) != 0);
@@ -199,12 +202,14 @@ void HpService::install_counter_hooks(unsigned a) {
     v = od::encode<double>(ch.pos_query());
   };
   uint16_t q = index(a, kQuadrature);
-  hook(kQuadrature, hp44714a::quad_sub::kQscale, [&ch](std::span<const uint8_t> d) {
+  hook(kQuadrature, hp44714a::quad_sub::kQscale, [this, a, &ch](std::span<const uint8_t> d) {
     if (!std::isfinite(real(d))) return SdoAbort::InvalidValue;
+    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
     ch.qscale(real(d));
     return SdoAbort::None;
   });
-  hook(kQuadrature, hp44714a::quad_sub::kQindex, [&ch](std::span<const uint8_t> d) {
+  hook(kQuadrature, hp44714a::quad_sub::kQindex, [this, a, &ch](std::span<const uint8_t> d) {
+    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
     ch.qindex(static_cast<hp::QIndexMode>(u8(d)));
     return SdoAbort::None;
   });
@@ -214,7 +219,8 @@ void HpService::install_counter_hooks(unsigned a) {
   od.at(q, hp44714a::quad_sub::kQpos).on_read = [&ch](od::Bytes& v) {
     v = od::encode<double>(ch.qpos_query());
   };
-  hook(kInterrupt, hp44714a::intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
+  hook(kInterrupt, hp44714a::intr_sub::kEnable, [this, a, &ch](std::span<const uint8_t> d) {
+    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
     if (u8(d)) ch.enable_intr();
     else ch.disable_intr();
     return SdoAbort::None;
