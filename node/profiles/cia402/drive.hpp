@@ -176,8 +176,14 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   HomingInputs homing_inputs() const;
   void cyclic_position(int64_t target, motion::Tick now);
   void cyclic_velocity(int64_t velocity, motion::Tick now);
+  // Before a stop ramp (6084h or 6085h) of a cyclic job: the job carried over to a profile
+  // ramp it can ramp down on (drive_cyclic.cpp); any other job is left as it is.
+  void ramp_from_cyclic(motion::Tick now);
+  // A stop ramp of the drive's own: 6085h (quick stop ramp) or 6084h.
+  void ramp_down(bool quick, motion::Tick now);
   void measure_cycle(motion::Tick arrival);
-  // CSP or IP in operation enabled: 60F4h is the demand minus the actual position.
+  // CSP or IP in operation enabled, on the master's set-points (not on a stop ramp of the
+  // drive's own): 60F4h is the demand minus the actual position.
   bool following_position() const;
   // ... and 6065h is set: the error is watched.
   bool following_error_watched() const;
@@ -245,6 +251,9 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   motion::Tick seg_start_ = 0, seg_ticks_ = 1;
   int64_t seg_steps_ = 0;  // the steps the segment's job gives (fewer than d: it lags)
   bool csv_running_ = false;
+  // The drive's own stop ramp replaced the cyclic trajectory: 6062h is the steps given and
+  // 60F4h is 0 until a SYNC starts a segment again.
+  bool own_ramp_ = false;
   int32_t ip_set_point_ = 0;
   int32_t following_error_value_ = 0;
   int32_t demand_ = 0;

@@ -8,7 +8,13 @@
 // SYNC) leaves the axis at the last one: no extrapolation, no jump. A SYNC before the
 // previous segment is done (jitter) folds its remaining steps into the new one. CSV: the
 // velocity changes at once at the SYNC, keeping the phase (no step gained or lost).
+//
+// Stops: the master's set-points are the trajectory, so a cyclic job runs at one velocity
+// with nothing to ramp (base level = run level). A stop the drive makes itself (the option
+// codes' ramps, a mode change) first carries the job over to a profile ramp from standstill
+// at the velocity it runs (ramp_from_cyclic), which the stop then ramps down as in PV.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 #include "node/profiles/cia402/drive.hpp"
@@ -52,7 +58,10 @@ void Drive::measure_cycle(Tick arrival) {
 
 void Drive::sync(Tick now, Tick arrival) {
   measure_cycle(arrival);
-  if (!machine_.operation_enabled() || halted_ || !cyclic(mode_display_)) return;
+  // Not while the drive stops on its own ramp: halted, a state machine's stop (not
+  // operation enabled) or a mode change waiting for the motion's end.
+  if (!machine_.operation_enabled() || halted_ || !cyclic(mode_display_) || mode_ != mode_display_)
+    return;
   core_.advance_to(now);
   switch (mode_display_) {
     case Mode::CyclicSyncPosition: cyclic_position(target_position_, now); break;
@@ -69,6 +78,7 @@ void Drive::cyclic_position(int64_t target, Tick now) {
   if (core_.busy() && !core_.owned_by(*this)) return;  // another front end's job
   target = clamp_to_limits(target);
   csv_running_ = false;
+  own_ramp_ = false;
   const int64_t from = core_.position();
   seg_from_ = from;
   seg_to_ = target;
@@ -108,11 +118,30 @@ void Drive::cyclic_velocity(int64_t velocity, Tick now) {
     return;
   }
   if (core_.owned_by(*this)) core_.halt(*this, now);  // a reversal: at once, the master's ramp
+  own_ramp_ = false;
   motion::RampSpec r;  // one level a step/s: every whole velocity exact
   r.phase_per_step = motion::kClockHz;
   r.base_level = r.run_level = r.min_creep_level = std::llabs(velocity);
   r.accel_ticks_per_level = r.decel_ticks_per_level = motion::Rational{1, 1};
   csv_running_ = core_.start(*this, r, sign(velocity), std::nullopt, now);
+}
+
+void Drive::ramp_from_cyclic(Tick now) {
+  if (!cyclic(mode_display_) || !core_.owned_by(*this) || !core_.moving()) return;
+  const motion::StepGenerator& g = core_.generator();
+  if (g.stopping()) return;  // already on a stop ramp, on its profile's grid
+  // The job at its velocity without an end (CSP's segment end given up), then on PV's grid:
+  // the velocity to 1/grid_ step/s, the phase kept (no step gained or lost), and 6084h as
+  // the ramp down (6085h: quick_stop_slope() on the same grid). A trapezoid: the cyclic
+  // modes keep theirs (6086h is PP's and PV's).
+  core_.set_level(now, g.level());
+  const int64_t acc = std::max<uint32_t>(parameters_.acceleration, 1);
+  const int64_t dec = std::max<uint32_t>(parameters_.deceleration, 1);
+  grid_ = motion::profile_levels_per_hz(std::max(acc, dec));
+  const int64_t v = std::max<int64_t>(std::llround(g.velocity()), 1);
+  core_.regrid(now, motion::profile_ramp(v, acc, dec, grid_));
+  csv_running_ = false;
+  own_ramp_ = true;
 }
 
 int64_t Drive::cyclic_demand(Tick now) const {
