@@ -100,6 +100,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void set_mode(Mode mode, motion::Tick now);                            // 6060h (runs(mode) only)
   void set_target_position(int32_t steps) { target_position_ = steps; }  // 607Ah
   void set_target_velocity(int32_t steps_per_s, motion::Tick now);       // 60FFh
+  // 60B0h position offset, added to 607Ah in CSP; 60B1h velocity offset, added to 60FFh in
+  // CSV (CiA 402-2). In CSP 60B1h would be a velocity feed-forward: this drive (linear
+  // interpolation of the set-points, open loop) has none, so it is not used there.
+  void set_position_offset(int32_t steps) { position_offset_ = steps; }
+  void set_velocity_offset(int32_t steps_per_s) { velocity_offset_ = steps_per_s; }
   Parameters& parameters() { return parameters_; }
   void set_options(const Options& options) { machine_.set_options(options); }
 
@@ -208,7 +213,9 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   uint16_t controlword_ = 0;
   int32_t target_position_ = 0;
   int32_t target_velocity_ = 0;
-  int64_t grid_ = 1;  // levels per step/s of the running motion
+  int32_t position_offset_ = 0;  // 60B0h
+  int32_t velocity_offset_ = 0;  // 60B1h
+  int64_t grid_ = 1;             // levels per step/s of the running motion
 
   // PP: the set-point being carried out, the buffered next one (bit 5 = 0), and the
   // handshake (bit 4 edge -> bit 12 until bit 4 is taken back).

@@ -15,6 +15,7 @@
 // at the velocity it runs (ramp_from_cyclic), which the stop then ramps down as in PV.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 
 #include "node/profiles/cia402/drive.hpp"
@@ -26,6 +27,8 @@ using motion::Tick;
 namespace {
 
 int sign(int64_t v) { return v < 0 ? -1 : +1; }
+
+int64_t saturated(int64_t v) { return std::clamp<int64_t>(v, INT32_MIN, INT32_MAX); }
 
 }  // namespace
 
@@ -64,11 +67,16 @@ void Drive::sync(Tick now, Tick arrival) {
     return;
   core_.advance_to(now);
   switch (mode_display_) {
-    case Mode::CyclicSyncPosition: cyclic_position(target_position_, now); break;
+    // CSP's input is 607Ah + 60B0h, CSV's 60FFh + 60B1h, each sum held to INTEGER32.
+    case Mode::CyclicSyncPosition:
+      cyclic_position(saturated(int64_t{target_position_} + position_offset_), now);
+      break;
     case Mode::InterpolatedPosition:
       if (controlword_ & kEnableIp) cyclic_position(ip_set_point_, now);
       break;
-    case Mode::CyclicSyncVelocity: cyclic_velocity(target_velocity_, now); break;
+    case Mode::CyclicSyncVelocity:
+      cyclic_velocity(saturated(int64_t{target_velocity_} + velocity_offset_), now);
+      break;
     default: break;
   }
   notify();
