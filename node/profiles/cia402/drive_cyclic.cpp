@@ -36,13 +36,15 @@ void Drive::measure_cycle(Tick arrival) {
   // The cycle is the SYNC period as received (the master's 60C2h may not be written),
   // starting from 60C2h. One odd interval changes nothing: two SYNCs read out of a queued
   // socket arrive microseconds apart, a missed SYNC leaves a double one. An interval within
-  // half to twice the cycle is averaged in (jitter); eight in a row that agree with each
-  // other to a quarter but not with the cycle are a new period, and it is taken (a stalled
-  // process reads a few long intervals in a row: they are not a new period).
+  // half a cycle of the cycle is averaged in (jitter); one nearer a whole multiple of two or
+  // more is missed SYNCs, and odd (averaged in up to twice the cycle, one lost SYNC in a 1 ms
+  // stream made the cycle 1.25 ms, every set-point after it reached late: found in review).
+  // Eight odd ones in a row that agree with each other to a quarter are a new period, and
+  // it is taken (a stalled process reads a few long intervals in a row: not a new period).
   if (cycle_ <= 0) cycle_ = std::max<Tick>(parameters_.interpolation_period, 1);
   if (last_sync_) {
     const Tick d = arrival - *last_sync_;
-    if (d > 0 && 2 * d >= cycle_ && d <= 2 * cycle_) {
+    if (d > 0 && 2 * d >= cycle_ && 2 * d < 3 * cycle_) {
       cycle_ = (3 * cycle_ + d) / 4;
       odd_intervals_ = 0;
     } else if (d > 0) {
