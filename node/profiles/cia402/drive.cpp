@@ -199,9 +199,11 @@ void Drive::interrupt_homing(Tick now) {
 
 motion::FrontEnd::Hooks Drive::hooks() const {
   // after_step's rules: homing's and a queued set-point's (change on set-point) look at
-  // every step; otherwise the one rule is the stop at a limit switch.
+  // every step; otherwise the rules are the stop at a limit switch and, in the velocity
+  // modes, the stop before a software limit (607Dh, drive_limits.cpp).
   return {.every_step = homing_ == Homing::InProgress || next_.has_value(),
-          .step_rule_inputs = motion::kLimitInputs};
+          .step_rule_inputs = motion::kLimitInputs,
+          .step_rule_position = limit_rule_};
 }
 
 void Drive::after_step(const motion::Step& step) {
@@ -210,6 +212,10 @@ void Drive::after_step(const motion::Step& step) {
   const motion::InputLevels& in = core_.inputs();
   if (step.direction < 0 ? in.lower_limit() : in.upper_limit()) [[unlikely]]
     return stop_at_limit(step.time);
+  // A software limit ahead (607Dh): its brake point, or the limit itself.
+  if (limit_rule_ && core_.position() == *limit_rule_ && step.direction == limit_direction_)
+      [[unlikely]]
+    return at_limit_rule(step.time);
   // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
   if (next_ && next_->through && active_ && core_.position() == active_->target)
     pass_first_target(step.time);
@@ -226,6 +232,7 @@ void Drive::after_step(const motion::Step& step) {
 }
 
 void Drive::motion_ended(Tick when) {
+  limit_rule_.reset();                // the motion's rule ends with it
   if (stopping_for_machine_) return;  // advanced() completes the transition
   if (homing_ == Homing::InProgress && search_stopping_) {
     search_stopping_ = false;
@@ -260,6 +267,7 @@ void Drive::motion_ended(Tick when) {
 
 void Drive::aborted(Tick when) {
   (void)when;
+  limit_rule_.reset();
   if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
   active_.reset();
   next_.reset();

@@ -152,6 +152,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // AxisListener: the status follows every job on the axis; the e-stop is a fault (9000h).
   void emergency_stop(motion::Tick when, bool was_moving) override;
   void advanced(motion::Tick now) override;
+  void job_halted(const motion::FrontEnd& owner, motion::Tick when) override;
 
  private:
   struct SetPoint {
@@ -200,6 +201,22 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // ... and at an advance, the fault once it has been outside for 6066h.
   void check_following_error(motion::Tick now);
   int64_t cyclic_demand(motion::Tick now) const;
+  // 607Dh in PV and CSV, and on the cyclic modes' stop ramps (drive_limits.cpp): the limit
+  // in `direction` while the limits are in effect; whether the quick stop is jerk-limited;
+  // the most steps a 6085h stop from `v` steps/s takes (`accelerating`: begun in a ramp up);
+  // the highest velocity a ramp from `from` to `to` reaches before it must turn to stop
+  // before the limit; the step at which a motion from `from` at up to `v` begins its stop.
+  std::optional<int64_t> limit_ahead(int direction) const;
+  bool jerk_limited_stop() const;
+  double stop_steps(double v, bool accelerating) const;
+  double reachable(int direction, double from, double to) const;
+  std::optional<int64_t> brake_point(int direction, double from, double v) const;
+  bool room_to_stop(int direction, double from, double v) const;
+  // The running motion, toward `direction` from `from` at up to `v`: its brake point as the
+  // step rule (or the stop now, if it is there already).
+  void watch_limit(int direction, double from, double v, motion::Tick now);
+  void brake_for_limit(int direction, motion::Tick at);
+  void at_limit_rule(motion::Tick at);
   motion::RampSpec ramp(uint32_t velocity) const;
   motion::Rational quick_stop_slope() const;
   int64_t clamp_to_limits(int64_t target);
@@ -233,6 +250,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // PV: a reversal runs as a stop, then a start the other way.
   std::optional<int64_t> velocity_after_stop_;
   uint16_t last_status_ = 0;
+  // 607Dh in the velocity modes: the step rule of the running motion (its brake point, then
+  // the limit once it brakes), the direction it watches.
+  std::optional<int32_t> limit_rule_;
+  int limit_direction_ = 0;
+  bool limit_braking_ = false;
 
   // HM: the searches of the method being performed and where it is.
   enum class Homing : uint8_t { Idle, InProgress, Attained, Error };

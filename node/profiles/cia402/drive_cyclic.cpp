@@ -89,6 +89,7 @@ void Drive::cyclic_position(int64_t target, Tick now) {
   target = clamp_to_limits(target);
   csv_running_ = false;
   own_ramp_ = false;
+  limit_rule_.reset();  // the segment ends inside 607Dh (a stop ramp's rule is over)
   const int64_t from = core_.position();
   seg_from_ = from;
   seg_to_ = target;
@@ -118,13 +119,27 @@ void Drive::cyclic_velocity(int64_t velocity, Tick now) {
   velocity =
       std::clamp<int64_t>(velocity, -int64_t{parameters_.max_velocity}, parameters_.max_velocity);
   const motion::StepGenerator& g = core_.generator();
+  const bool on_the_way = core_.owned_by(*this) && g.moving() && g.direction() == sign(velocity);
+  // 607Dh: toward a limit the axis could not stop before from this velocity, a motion on
+  // its way there stops now (6085h), none starts (drive_limits.cpp; CSV ran past them:
+  // found in review).
+  internal_limit_ =
+      velocity != 0 && !room_to_stop(sign(velocity), 0, static_cast<double>(std::llabs(velocity)));
+  if (internal_limit_) {
+    if (on_the_way) {
+      if (!g.stopping()) brake_for_limit(sign(velocity), now);
+      return;
+    }
+    velocity = 0;
+  }
   if (velocity == 0) {
     if (core_.owned_by(*this)) core_.halt(*this, now);
     csv_running_ = false;
     return;
   }
-  if (csv_running_ && core_.owned_by(*this) && g.moving() && g.direction() == sign(velocity)) {
+  if (csv_running_ && on_the_way) {
     core_.set_level(now, std::llabs(velocity));
+    watch_limit(sign(velocity), 0, static_cast<double>(std::llabs(velocity)), now);
     return;
   }
   if (core_.owned_by(*this)) core_.halt(*this, now);  // a reversal: at once, the master's ramp
@@ -134,12 +149,13 @@ void Drive::cyclic_velocity(int64_t velocity, Tick now) {
   r.base_level = r.run_level = r.min_creep_level = std::llabs(velocity);
   r.accel_ticks_per_level = r.decel_ticks_per_level = motion::Rational{1, 1};
   csv_running_ = core_.start(*this, r, sign(velocity), std::nullopt, now);
+  if (csv_running_) watch_limit(sign(velocity), 0, static_cast<double>(std::llabs(velocity)), now);
 }
 
 void Drive::ramp_from_cyclic(Tick now) {
   if (!cyclic(mode_display_) || !core_.owned_by(*this) || !core_.moving()) return;
   const motion::StepGenerator& g = core_.generator();
-  if (g.stopping()) return;  // already on a stop ramp, on its profile's grid
+  if (own_ramp_ || g.stopping()) return;  // already on a stop ramp, on its profile's grid
   // The job at its velocity without an end (CSP's segment end given up), then on PV's grid:
   // the velocity to 1/grid_ step/s, the phase kept (no step gained or lost), and 6084h as
   // the ramp down (6085h: quick_stop_slope() on the same grid). A trapezoid: the cyclic
@@ -152,6 +168,8 @@ void Drive::ramp_from_cyclic(Tick now) {
   core_.regrid(now, motion::profile_ramp(v, acc, dec, grid_));
   csv_running_ = false;
   own_ramp_ = true;
+  // The ramp ends on or before 607Dh (CSP's targets are inside, its ramp may overrun them).
+  watch_limit(g.direction(), 0, static_cast<double>(v), now);
 }
 
 int64_t Drive::cyclic_demand(Tick now) const {
