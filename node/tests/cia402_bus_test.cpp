@@ -5,6 +5,7 @@
 // (06h, 07h, 0Fh) and the profile position set-point handshake (bit 4 -> bit 12).
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <optional>
 
 #include "node/tests/node_harness.hpp"
@@ -208,6 +209,80 @@ TEST_F(Cia402Bus, TheMastersHeartbeatBackLeavesTheDrivesFaultAnError) {
   EXPECT_EQ(with_id(kEmcyId, before_reset),
             std::vector<CanFrame>{CanFrame(kEmcyId, {0, 0, 0, 0, 0, 0, 0, 0})})
       << "now the error reset";
+}
+
+// ---- the cyclic modes' offsets (CiA 402-2 60B0h, 60B1h) ------------------------------
+
+class Cia402Offsets : public Cia402Bus {
+ protected:
+  void enable(int8_t mode) {
+    ASSERT_EQ(sdo_write(0x607F, 0, 100'000), 0u);  // max profile velocity, steps/s
+    for (const uint16_t cw : {0x06, 0x07, 0x0F}) rpdo1(cw, mode);
+    advance_ms(2);
+    ASSERT_EQ(*sdo_read(0x6061, 0), static_cast<uint32_t>(mode));
+  }
+  // The master's SYNCs, one a millisecond (60C2h's default).
+  void syncs(int n) {
+    for (int k = 0; k < n; ++k) {
+      sync();
+      advance_ms(1);
+    }
+  }
+  int32_t read_i32(uint16_t index) { return static_cast<int32_t>(*sdo_read(index, 0)); }
+};
+
+// 60B0h "Position offset": "This object shall provide the offset of the target position";
+// CSP's position input is 607Ah + 60B0h.
+TEST_F(Cia402Offsets, CspAddsThePositionOffsetToTheTargetPosition) {
+  enable(8);
+  rpdo2(0, 0);
+  ASSERT_EQ(sdo_write(0x60B0, 0, 100), 0u);
+  syncs(10);
+  EXPECT_EQ(read_i32(0x6064), 100) << "607Ah 0 + 60B0h 100";
+  ASSERT_EQ(sdo_write(0x60B0, 0, static_cast<uint32_t>(-50)), 0u);
+  rpdo2(30, 0);
+  syncs(10);
+  EXPECT_EQ(read_i32(0x6064), -20) << "607Ah 30 + 60B0h -50";
+}
+
+// 60B1h "Velocity offset": CSV's velocity input is 60FFh + 60B1h.
+TEST_F(Cia402Offsets, CsvAddsTheVelocityOffsetToTheTargetVelocity) {
+  enable(9);
+  rpdo2(0, 1000);
+  ASSERT_EQ(sdo_write(0x60B1, 0, 500), 0u);
+  syncs(20);
+  EXPECT_EQ(read_i32(0x606C), 1500) << "60FFh 1000 + 60B1h 500";
+}
+
+// This drive has no velocity feed-forward: in CSP 60B1h changes nothing.
+TEST_F(Cia402Offsets, CspIgnoresTheVelocityOffset) {
+  enable(8);
+  rpdo2(200, 0);
+  ASSERT_EQ(sdo_write(0x60B1, 0, 5000), 0u);
+  syncs(10);
+  EXPECT_EQ(read_i32(0x6064), 200);
+  EXPECT_EQ(read_i32(0x606C), 0);
+}
+
+// The sums saturate at the INTEGER32 range: 607Ah 7FFFFFFFh + 60B0h 1 is a target beyond
+// the upper software limit (not -80000000h, beyond the lower one), 60FFh 7FFFFFFFh + 60B1h
+// 1 a velocity beyond 607Fh upward.
+TEST_F(Cia402Offsets, TheSumsSaturate) {
+  ASSERT_EQ(sdo_write(0x607D, 1, static_cast<uint32_t>(-1000)), 0u);
+  ASSERT_EQ(sdo_write(0x607D, 2, 1000), 0u);
+  enable(8);
+  rpdo2(INT32_MAX, INT32_MAX);
+  ASSERT_EQ(sdo_write(0x60B0, 0, 1), 0u);
+  ASSERT_EQ(sdo_write(0x60B1, 0, 1), 0u);
+  syncs(30);
+  EXPECT_EQ(read_i32(0x6064), 1000);
+  rpdo1(0x0F, 9);  // CSV from here
+  advance_ms(2);
+  ASSERT_EQ(sdo_write(0x607F, 0, 2000), 0u);
+  ASSERT_EQ(sdo_write(0x6085, 0, 1'000'000), 0u);
+  ASSERT_EQ(sdo_write(0x607D, 2, 100'000), 0u);
+  syncs(5);
+  EXPECT_EQ(read_i32(0x606C), 2000);
 }
 
 }  // namespace

@@ -35,6 +35,7 @@ void Drive::power_up(Tick now, Mode mode) {
   velocity_after_stop_.reset();
   in_window_since_.reset();
   target_reached_ = true;
+  own_ramp_ = false;
   homing_ = Homing::Idle;
   search_stopping_ = false;
   connection_lost_ = false;
@@ -63,8 +64,8 @@ void Drive::carry_out(Stop stop, Tick now) {
     // (current or voltage limit): the fastest stop that holds the motor, the same for a stepper.
     case Stop::DisableDrive:
     case Stop::Immediate: core_.abort(this, now); break;
-    case Stop::SlowDownRamp: core_.stop(now); break;
-    case Stop::QuickStopRamp: core_.stop(now, quick_stop_slope()); break;
+    case Stop::SlowDownRamp: ramp_down(false, now); break;
+    case Stop::QuickStopRamp: ramp_down(true, now); break;
   }
   active_.reset();
   next_.reset();
@@ -76,6 +77,14 @@ void Drive::carry_out(Stop stop, Tick now) {
     stopping_for_machine_ = true;
     if (!core_.moving()) stopped(now);
   }
+}
+
+void Drive::ramp_down(bool quick, Tick now) {
+  // A cyclic job has nothing to ramp down on: it is carried over to a ramp first (it
+  // stopped at once: found in review).
+  ramp_from_cyclic(now);
+  if (quick) core_.stop(now, quick_stop_slope());
+  else core_.stop(now);
 }
 
 void Drive::stopped(Tick now) {
@@ -139,7 +148,7 @@ void Drive::set_mode(Mode mode, Tick now) {
     velocity_after_stop_.reset();
     csv_running_ = false;
     if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
-    core_.stop(now);
+    ramp_down(false, now);
   }
   if (mode_display_ == Mode::ProfileVelocity && mode_ == mode_display_ &&
       machine_.operation_enabled() && !halted_)
@@ -165,10 +174,10 @@ void Drive::halt(bool on, Tick now) {
   restart_after_stop_ = false;
   velocity_after_stop_.reset();
   switch (machine_.halt_stop()) {
-    case Stop::QuickStopRamp: core_.stop(now, quick_stop_slope()); break;
+    case Stop::QuickStopRamp: ramp_down(true, now); break;
     case Stop::Immediate:
     case Stop::DisableDrive: core_.halt(*this, now); break;
-    default: core_.stop(now); break;
+    default: ramp_down(false, now); break;
   }
 }
 
@@ -190,9 +199,11 @@ void Drive::interrupt_homing(Tick now) {
 
 motion::FrontEnd::Hooks Drive::hooks() const {
   // after_step's rules: homing's and a queued set-point's (change on set-point) look at
-  // every step; otherwise the one rule is the stop at a limit switch.
+  // every step; otherwise the rules are the stop at a limit switch and, in the velocity
+  // modes, the stop before a software limit (607Dh, drive_limits.cpp).
   return {.every_step = homing_ == Homing::InProgress || next_.has_value(),
-          .step_rule_inputs = motion::kLimitInputs};
+          .step_rule_inputs = motion::kLimitInputs,
+          .step_rule_position = limit_rule_};
 }
 
 void Drive::after_step(const motion::Step& step) {
@@ -201,6 +212,10 @@ void Drive::after_step(const motion::Step& step) {
   const motion::InputLevels& in = core_.inputs();
   if (step.direction < 0 ? in.lower_limit() : in.upper_limit()) [[unlikely]]
     return stop_at_limit(step.time);
+  // A software limit ahead (607Dh): its brake point, or the limit itself.
+  if (limit_rule_ && core_.position() == *limit_rule_ && step.direction == limit_direction_)
+      [[unlikely]]
+    return at_limit_rule(step.time);
   // Change on set-point: on the first target the next set-point takes over (drive_pp.cpp).
   if (next_ && next_->through && active_ && core_.position() == active_->target)
     pass_first_target(step.time);
@@ -217,6 +232,7 @@ void Drive::after_step(const motion::Step& step) {
 }
 
 void Drive::motion_ended(Tick when) {
+  limit_rule_.reset();                // the motion's rule ends with it
   if (stopping_for_machine_) return;  // advanced() completes the transition
   if (homing_ == Homing::InProgress && search_stopping_) {
     search_stopping_ = false;
@@ -251,6 +267,7 @@ void Drive::motion_ended(Tick when) {
 
 void Drive::aborted(Tick when) {
   (void)when;
+  limit_rule_.reset();
   if (homing_ == Homing::InProgress) homing_ = Homing::Idle;
   active_.reset();
   next_.reset();
@@ -288,8 +305,9 @@ void Drive::advanced(Tick now) {
   // 6062h: the interpolated trajectory in CSP and IP; otherwise (open loop) the steps given.
   const bool interpolating =
       mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition;
-  demand_ = interpolating && core_.owned_by(*this) ? static_cast<int32_t>(cyclic_demand(now))
-                                                   : core_.position();
+  demand_ = interpolating && core_.owned_by(*this) && !own_ramp_
+                ? static_cast<int32_t>(cyclic_demand(now))
+                : core_.position();
   machine_.set_fault_condition_active(core_.estop_active() || connection_lost_);
   // The e-stop input is a fault whether or not the axis moves (the core tells of it only
   // when it ends a job).

@@ -100,6 +100,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   void set_mode(Mode mode, motion::Tick now);                            // 6060h (runs(mode) only)
   void set_target_position(int32_t steps) { target_position_ = steps; }  // 607Ah
   void set_target_velocity(int32_t steps_per_s, motion::Tick now);       // 60FFh
+  // 60B0h position offset, added to 607Ah in CSP; 60B1h velocity offset, added to 60FFh in
+  // CSV (CiA 402-2). In CSP 60B1h would be a velocity feed-forward: this drive (linear
+  // interpolation of the set-points, open loop) has none, so it is not used there.
+  void set_position_offset(int32_t steps) { position_offset_ = steps; }
+  void set_velocity_offset(int32_t steps_per_s) { velocity_offset_ = steps_per_s; }
   Parameters& parameters() { return parameters_; }
   void set_options(const Options& options) { machine_.set_options(options); }
 
@@ -147,6 +152,7 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // AxisListener: the status follows every job on the axis; the e-stop is a fault (9000h).
   void emergency_stop(motion::Tick when, bool was_moving) override;
   void advanced(motion::Tick now) override;
+  void job_halted(const motion::FrontEnd& owner, motion::Tick when) override;
 
  private:
   struct SetPoint {
@@ -176,8 +182,14 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   HomingInputs homing_inputs() const;
   void cyclic_position(int64_t target, motion::Tick now);
   void cyclic_velocity(int64_t velocity, motion::Tick now);
+  // Before a stop ramp (6084h or 6085h) of a cyclic job: the job carried over to a profile
+  // ramp it can ramp down on (drive_cyclic.cpp); any other job is left as it is.
+  void ramp_from_cyclic(motion::Tick now);
+  // A stop ramp of the drive's own: 6085h (quick stop ramp) or 6084h.
+  void ramp_down(bool quick, motion::Tick now);
   void measure_cycle(motion::Tick arrival);
-  // CSP or IP in operation enabled: 60F4h is the demand minus the actual position.
+  // CSP or IP in operation enabled, on the master's set-points (not on a stop ramp of the
+  // drive's own): 60F4h is the demand minus the actual position.
   bool following_position() const;
   // ... and 6065h is set: the error is watched.
   bool following_error_watched() const;
@@ -189,6 +201,22 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // ... and at an advance, the fault once it has been outside for 6066h.
   void check_following_error(motion::Tick now);
   int64_t cyclic_demand(motion::Tick now) const;
+  // 607Dh in PV and CSV, and on the cyclic modes' stop ramps (drive_limits.cpp): the limit
+  // in `direction` while the limits are in effect; whether the quick stop is jerk-limited;
+  // the most steps a 6085h stop from `v` steps/s takes (`accelerating`: begun in a ramp up);
+  // the highest velocity a ramp from `from` to `to` reaches before it must turn to stop
+  // before the limit; the step at which a motion from `from` at up to `v` begins its stop.
+  std::optional<int64_t> limit_ahead(int direction) const;
+  bool jerk_limited_stop() const;
+  double stop_steps(double v, bool accelerating) const;
+  double reachable(int direction, double from, double to) const;
+  std::optional<int64_t> brake_point(int direction, double from, double v) const;
+  bool room_to_stop(int direction, double from, double v) const;
+  // The running motion, toward `direction` from `from` at up to `v`: its brake point as the
+  // step rule (or the stop now, if it is there already).
+  void watch_limit(int direction, double from, double v, motion::Tick now);
+  void brake_for_limit(int direction, motion::Tick at);
+  void at_limit_rule(motion::Tick at);
   motion::RampSpec ramp(uint32_t velocity) const;
   motion::Rational quick_stop_slope() const;
   int64_t clamp_to_limits(int64_t target);
@@ -202,7 +230,9 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   uint16_t controlword_ = 0;
   int32_t target_position_ = 0;
   int32_t target_velocity_ = 0;
-  int64_t grid_ = 1;  // levels per step/s of the running motion
+  int32_t position_offset_ = 0;  // 60B0h
+  int32_t velocity_offset_ = 0;  // 60B1h
+  int64_t grid_ = 1;             // levels per step/s of the running motion
 
   // PP: the set-point being carried out, the buffered next one (bit 5 = 0), and the
   // handshake (bit 4 edge -> bit 12 until bit 4 is taken back).
@@ -220,6 +250,11 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   // PV: a reversal runs as a stop, then a start the other way.
   std::optional<int64_t> velocity_after_stop_;
   uint16_t last_status_ = 0;
+  // 607Dh in the velocity modes: the step rule of the running motion (its brake point, then
+  // the limit once it brakes), the direction it watches.
+  std::optional<int32_t> limit_rule_;
+  int limit_direction_ = 0;
+  bool limit_braking_ = false;
 
   // HM: the searches of the method being performed and where it is.
   enum class Homing : uint8_t { Idle, InProgress, Attained, Error };
@@ -245,6 +280,9 @@ class Drive final : public motion::FrontEnd, public motion::AxisListener {
   motion::Tick seg_start_ = 0, seg_ticks_ = 1;
   int64_t seg_steps_ = 0;  // the steps the segment's job gives (fewer than d: it lags)
   bool csv_running_ = false;
+  // The drive's own stop ramp replaced the cyclic trajectory: 6062h is the steps given and
+  // 60F4h is 0 until a SYNC starts a segment again.
+  bool own_ramp_ = false;
   int32_t ip_set_point_ = 0;
   int32_t following_error_value_ = 0;
   int32_t demand_ = 0;

@@ -32,7 +32,8 @@ Tick ceil_div(__int128 a, __int128 b) { return static_cast<Tick>((a + b - 1) / b
 }  // namespace
 
 bool Drive::following_position() const {
-  return machine_.operation_enabled() &&
+  // Not on the drive's own stop ramp (a halt's, a mode change's): the ramp is the demand.
+  return machine_.operation_enabled() && !own_ramp_ &&
          (mode_display_ == Mode::CyclicSyncPosition || mode_display_ == Mode::InterpolatedPosition);
 }
 

@@ -50,6 +50,10 @@ void Cia402Service::install_hooks(unsigned a) {
     publish(a);
   });
   od::listen(entry(kTargetPosition), [this, a] { load_targets(a); });
+  // The offsets a master streams with the cyclic set-points (60B0h: CSP, 60B1h: CSV), taken
+  // at the next SYNC like the set-points.
+  od::listen(entry(kPositionOffset), [this, a] { load_targets(a); });
+  od::listen(entry(kVelocityOffset), [this, a] { load_targets(a); });
   od::listen(entry(kInterpolationData, cia402::ip_data_sub::kSetPoint), [this, a] {
     drives_[a]->set_ip_set_point(to_i32(units_[a].to_steps(
         dictionary_.get<int32_t>(index(a, kInterpolationData), cia402::ip_data_sub::kSetPoint))));
@@ -142,8 +146,12 @@ void Cia402Service::load_options(unsigned a) {
 }
 
 void Cia402Service::load_targets(unsigned a) {
-  drives_[a]->set_target_position(
-      to_i32(units_[a].to_steps(dictionary_.get<int32_t>(index(a, kTargetPosition), 0))));
+  const auto steps = [&](uint16_t base) {
+    return to_i32(units_[a].to_steps(dictionary_.get<int32_t>(index(a, base), 0)));
+  };
+  drives_[a]->set_target_position(steps(kTargetPosition));
+  drives_[a]->set_position_offset(steps(kPositionOffset));
+  drives_[a]->set_velocity_offset(steps(kVelocityOffset));
 }
 
 void Cia402Service::configure(uint64_t) {

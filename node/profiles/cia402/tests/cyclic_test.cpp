@@ -123,6 +123,21 @@ TEST_F(Cyclic, AMissedSyncHoldsTheLastSetPoint) {
   EXPECT_EQ(drive.position_actual(), 130);
 }
 
+// One lost SYNC (a 2 ms gap in a 1 ms stream, 60C2h = 1 ms) is an odd interval, not a
+// longer cycle (it was averaged in: a cycle of 1.25 ms, each set-point reached late): the
+// set-point of every SYNC after it is reached one 1 ms period later.
+TEST_F(Cyclic, OneLostSyncDoesNotStretchTheInterpolationPeriod) {
+  enable(Mode::CyclicSyncPosition);
+  for (int k = 1; k <= 10; ++k) sync_to(ms(k), 10 * k);
+  // SYNC 11 is lost; the master's trajectory goes on at 10 steps a cycle.
+  for (int k = 12; k <= 20; ++k) {
+    sync_to(ms(k), 10 * k);
+    drive.advance(now = ms(k + 1));  // up to the next SYNC, before it is handled
+    EXPECT_EQ(drive.position_actual(), 10 * k)
+        << "the set-point of the SYNC at " << k << " ms, one 1 ms period later";
+  }
+}
+
 // Two SYNCs read out of a queued socket microseconds apart must not become the cycle (the
 // axis would be capped at a few steps a SYNC for good), and a period other than 60C2h's is
 // taken after three SYNCs that agree.
