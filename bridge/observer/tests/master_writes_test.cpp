@@ -69,13 +69,18 @@ TEST(MasterWrites, ARemapWhileAReadIsInFlightOnTheBridgesChannelKeepsTheTpdos) {
 // the default channel. CiA 301 7.2.4.1: the server answers in order, so the frames are
 // request (bridge), request (master), answer (bridge), confirmation (master); the
 // confirmation is the master's, whatever answer came before it.
-void follows_the_new_heartbeat_time(bool write_during_the_read) {
-  TestBus bus;
-  FakeNode node({.id = 5, .axes = 1});
+// Node 5 (one axis, a heartbeat every 100 ms) operational and discovered.
+void discovered(TestBus& bus, FakeNode& node) {
   bus.add(node, 100).state = 0x05;
   bus.boot(node);
   bus.run_ms(500);
   ASSERT_TRUE(bus.observer.node_health(5, bus.now_us).discovered);
+}
+
+void follows_the_new_heartbeat_time(bool write_during_the_read) {
+  TestBus bus;
+  FakeNode node({.id = 5, .axes = 1});
+  discovered(bus, node);
   node.hold = true;  // rebooted, it answers late: the bridge's read stays in flight
   bus.boot(node);
   bus.run_ms(300);  // heartbeats every 100 ms: the interval is measured
@@ -110,9 +115,7 @@ TEST(MasterWrites, ANewHeartbeatTimeWrittenAfterTheBridgesReadIsFollowed) {
 TEST(MasterWrites, ANewHeartbeatTimeKeepsTheNodesIdentity) {
   TestBus bus;
   FakeNode node({.id = 5, .axes = 1});
-  bus.add(node, 100).state = 0x05;
-  bus.boot(node);
-  bus.run_ms(500);
+  discovered(bus, node);
   ASSERT_TRUE(bus.observer.node_health(5, bus.now_us).is_stepnode);
   const size_t requests = bus.observer_sent.size();
   bus.master_start(5);

@@ -36,6 +36,15 @@ class VelocityLimit : public DriveAxis {
     }
     return furthest;
   }
+  // `n` ms of the drive's own motion (PV); the furthest position up reached in them.
+  int32_t furthest_up_in(int n) {
+    int32_t furthest = drive.position_actual();
+    for (int k = 0; k < n; ++k) {
+      run(ms(1));
+      furthest = std::max(furthest, drive.position_actual());
+    }
+    return furthest;
+  }
   // The steps of the motion's last ramp down: those after the last step that came no later
   // than the cruise's interval (`cruise` ticks, with a tick to spare) after the one before.
   size_t last_ramp_steps(Tick cruise) const {
@@ -84,11 +93,7 @@ TEST_F(VelocityLimit, PvStopsOnOrBeforeEachLimitWithThe6085hRamp) {
   drive.set_mode(Mode::ProfileVelocity, now);
   enable();
   drive.set_target_velocity(2000, now);
-  int32_t furthest = 0;
-  for (int k = 0; k < 2000; ++k) {
-    run(ms(1));
-    furthest = std::max(furthest, drive.position_actual());
-  }
+  const int32_t furthest = furthest_up_in(2000);
   EXPECT_EQ(furthest, drive.position_actual());
   EXPECT_LE(drive.position_actual(), 1000);
   EXPECT_GE(drive.position_actual(), 1000 - 210);
@@ -132,11 +137,7 @@ TEST_F(VelocityLimit, PvWithTheJerkLimitedRampStopsBeforeTheLimit) {
   drive.set_mode(Mode::ProfileVelocity, now);
   enable();
   drive.set_target_velocity(2000, now);
-  int32_t furthest = 0;
-  for (int k = 0; k < 2000; ++k) {
-    run(ms(1));
-    furthest = std::max(furthest, drive.position_actual());
-  }
+  const int32_t furthest = furthest_up_in(2000);
   EXPECT_LE(furthest, 1000);
   EXPECT_GE(drive.position_actual(), 1000 - 300);
   EXPECT_FALSE(core.moving());
