@@ -151,7 +151,10 @@ int run_axis_command(MasterBus& bus, int node, int axis, const std::vector<std::
     long long target = 0;
     try {
       size_t used = 0;
-      target = std::stoll(w[2], &used, 0);
+      // Decimal, or hex after 0x ("010" is ten, not octal eight).
+      const size_t sign = w[2][0] == '-' || w[2][0] == '+' ? 1 : 0;
+      const bool hex = w[2].compare(sign, 2, "0x") == 0 || w[2].compare(sign, 2, "0X") == 0;
+      target = std::stoll(w[2], &used, hex ? 16 : 10);
       if (used != w[2].size()) throw std::invalid_argument(w[2]);
     } catch (const std::exception&) {
       throw std::invalid_argument("move: '" + w[2] + "' is not a whole number of steps");

@@ -276,8 +276,8 @@ bool set_mode(Axis& a, int8_t mode) {
 }
 
 // Until bit 12 of 6041h is `on` (within kStepSeconds); false when it was not.
-bool wait_bit12(Axis& a, bool on, uint16_t& sw) {
-  const auto deadline = after(kStepSeconds);
+bool wait_bit12(Axis& a, bool on, uint16_t& sw, double seconds = kStepSeconds) {
+  const auto deadline = after(seconds);
   for (;;) {
     sw = a.statusword();
     if (((sw & drive::sw::kBit12) != 0) == on) return true;
@@ -351,12 +351,21 @@ int cmd_pp(Axis& a, const DriveArgs& args) {
   if (args.deceleration) a.write_u32(kProfileDeceleration, 0, *args.deceleration);
   a.write_i32(kTargetPosition, args.target);
   clear_bit4(a);
+  // The drive takes a new set-point only while 6041h bit 12 is 0: it stays 1 while its
+  // buffer is full, and an edge of bit 4 then is ignored (an earlier set-point waits for the
+  // move before it). Raised then, the old 1 looked like the acknowledgement of a set-point
+  // the drive never took (found in review).
+  uint16_t sw = 0;
+  if (!wait_bit12(a, false, sw, args.wait_s))
+    throw std::runtime_error(a.who() +
+                             ": the drive takes no new set-point (6041h bit 12 stayed 1 for " +
+                             std::to_string(args.wait_s) + " s: its set-point buffer is full; " +
+                             a.state_text(sw) + ", 6041h " + hex4(sw) + ")");
   const int64_t start = a.position();
   // The set-point handshake: bit 4 up, bit 12 answers; bit 4 down, bit 12 follows (it stays
   // up while the drive's buffer is full: the set-point waits for the move before it).
   const uint16_t cw = drive::set_point_controlword(args.immediate, args.relative);
   a.controlword(cw);
-  uint16_t sw = 0;
   if (!wait_bit12(a, true, sw))
     throw std::runtime_error(
         a.who() + ": the set-point was not acknowledged (6041h bit 12 stayed 0 for " +

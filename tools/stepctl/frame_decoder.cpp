@@ -16,8 +16,9 @@ std::string fmt(const char* f, unsigned a, unsigned b = 0, unsigned c = 0) {
   return buf;
 }
 
+// The state in bits 6..0: a node guarding answer has its toggle in bit 7 (CiA 301 7.2.8.3.2).
 const char* nmt_state(uint8_t s) {
-  switch (s) {
+  switch (s & 0x7F) {
     case 0x00: return "boot-up";
     case 0x04: return "stopped";
     case 0x05: return "operational";
@@ -44,7 +45,7 @@ std::string FrameDecoder::object_name(uint16_t index, uint8_t sub) const {
   return addr;
 }
 
-std::string FrameDecoder::describe(const od::CanFrame& f) const {
+std::string FrameDecoder::describe(const od::CanFrame& f) {
   const uint8_t* d = f.data.data();
   uint32_t id = f.id;
   if (f.rtr) return fmt("remote request 0x%03X", id);
@@ -82,11 +83,40 @@ std::string FrameDecoder::describe(const od::CanFrame& f) const {
   return fmt("0x%03X [%u] ", id, f.dlc) + hex_bytes(d, f.dlc);
 }
 
-std::string FrameDecoder::describe_sdo(const od::CanFrame& f, bool request) const {
+std::optional<std::string> FrameDecoder::describe_block(const od::CanFrame& f, bool request,
+                                                        uint8_t node) {
+  const uint8_t* d = f.data.data();
+  Block& b = blocks_[node & 0x7F];
+  if (d[0] == 0x80) {  // an abort ends any transfer (no segment has seqno 0)
+    b = Block::None;
+    return std::nullopt;
+  }
+  const bool segments_from_client = b == Block::Download || b == Block::DownloadLast;
+  const bool segments_from_server = b == Block::Upload || b == Block::UploadLast;
+  if ((request && segments_from_client) || (!request && segments_from_server)) {
+    const bool last = (d[0] & 0x80) != 0;
+    if (last) b = request ? Block::DownloadLast : Block::UploadLast;
+    return fmt("block segment %u", d[0] & 0x7F) + (last ? ", last: " : ": ") + hex_bytes(d + 1, 7);
+  }
+  const uint8_t cs = d[0] >> 5;
+  if (cs == 5 && (d[0] & 3) == 2) {  // an acknowledgement of a sub-block (either side)
+    if (b == Block::DownloadLast) b = Block::DownloadEnd;
+    if (b == Block::UploadLast) b = Block::UploadEnd;
+    return fmt("block ack: ackseq %u, next blksize %u", d[1], d[2]);
+  }
+  if (request && cs == 6) b = (d[0] & 1) ? Block::None : Block::Download;  // initiate / end
+  if (request && cs == 5 && (d[0] & 3) == 3) b = Block::Upload;            // start upload
+  if (request && cs == 5 && (d[0] & 3) == 1) b = Block::None;              // end response
+  if (!request && cs == 5 && (d[0] & 3) == 1 && b == Block::DownloadEnd) b = Block::None;
+  return std::nullopt;
+}
+
+std::string FrameDecoder::describe_sdo(const od::CanFrame& f, bool request) {
   const uint8_t* d = f.data.data();
   uint8_t node = static_cast<uint8_t>(f.id - (request ? 0x600 : 0x580));
   std::string head = fmt(request ? "SDO node %u request: " : "SDO node %u response: ", node);
   if (f.dlc != 8) return head + "malformed (DLC " + std::to_string(f.dlc) + ")";
+  if (auto block = describe_block(f, request, node)) return head + *block;
   uint8_t cs = d[0] >> 5;
   uint16_t index = od::get_u16(d + 1);
   uint8_t sub = d[3];

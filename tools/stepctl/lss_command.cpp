@@ -83,7 +83,9 @@ uint32_t parse_u32(const std::string& text, const char* what) {
   size_t used = 0;
   unsigned long long v = 0;
   try {
-    v = std::stoull(text, &used, 0);
+    // Decimal, or hex after 0x: a leading zero is no octal ("010" was sent as 8).
+    const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+    v = std::stoull(text, &used, hex ? 16 : 10);
   } catch (const std::exception&) {
     used = 0;
   }

@@ -196,7 +196,8 @@ void add_bus_options(CLI::App& app, Options& o) {
   app.add_option("--eds", o.eds,
                  "EDS file describing the node's objects (default: stepnode's own)");
   app.add_option("--timeout", o.timeout_ms, "SDO / confirmation timeout in ms")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(1, 3'600'000));  // -1 became ~2^64 us: a silent node's read never ended
   app.add_option(
       "--sdo-cob-ids", o.sdo_cob_ids,
       "SDO server channel to use, CLIENT_TO_SERVER,SERVER_TO_CLIENT as configured in the node's "
@@ -231,7 +232,8 @@ void add_object_commands(CLI::App& app, Options& o, Subcommands& s) {
 
   s.watch = app.add_subcommand("watch", "decode the bus traffic of every node");
   s.watch->add_flag("--passive", o.passive, "never send (do not read PDO mappings over SDO)");
-  s.watch->add_option("--seconds", o.seconds, "stop after this many seconds (0 = until Ctrl-C)");
+  s.watch->add_option("--seconds", o.seconds, "stop after this many seconds (0 = until Ctrl-C)")
+      ->check(CLI::Range(0, 31'536'000));
 }
 
 // Axis commands: stepctl clear|home up|move abs 1000|jog up|stop|estop|status --node N --axis A
@@ -249,7 +251,8 @@ void add_axis_commands(CLI::App& app, Options& o) {
   add_axis_command("move", "axis: move abs|rel POSITION (%Q9/%Q8), with live progress");
   add_axis_command("jog", "axis: jog up|down for --seconds (level-sensitive %Q6/%Q7)")
       ->add_option("--seconds", o.jog_seconds, "how long the jog bit stays on")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 86400.0));
   add_axis_command("stop", "axis: Decelerate and Stop (%Q15)");
   add_axis_command("estop", "axis: Immediate Stop (%Q16)");
   add_axis_command("status", "axis: status bits in words, motor and encoder position");
@@ -271,7 +274,8 @@ CLI::App* add_hp_command(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->check(CLI::Range(0, 7));
   hp->add_option("--wait", o.hp_wait_s, "MOVE/SUSTAIN without NOWAIT: give up after this many s")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(1, 86400));
   return hp;
 }
 

@@ -279,7 +279,8 @@ Options parse(int argc, char** argv, bool& exit_now, int& exit_code) {
   app.add_flag("--json", o.json, "JSON lines: per node and axis (--once) or per sample (live)");
   app.add_option("--csv", o.csv, "log every received sample to FILE (CSV)");
   app.add_option("--interval-ms", o.interval_ms, "live table redraw period (default 500)");
-  app.add_option("--count", o.count, "live: exit after N samples");
+  app.add_option("--count", o.count, "live: exit after N samples")
+      ->check(CLI::Range(0, 1'000'000'000));  // "-1" was taken as 2^64 - 1
   app.add_option("--duration-ms", o.duration_ms, "live: exit after MS milliseconds");
   app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error, off (default warn)");
   exit_now = false;
