@@ -279,6 +279,25 @@ def test_second_axis_uses_its_own_objects(stepctl, master, start_node, tmp_path)
     assert Drive(master, 1).read_i32(POSITION_ACTUAL) == 0
 
 
+def test_profile_position_waits_for_room_in_the_set_point_buffer(stepctl, master, start_node, tmp_path):
+    """CiA 402-2 PP: the drive takes a new set-point (bit 4's edge) only while 6041h bit 12 is
+    0; it stays 1 while the buffer holds a set-point behind the move. stepctl raised bit 4
+    then and took the old 1 for an acknowledgement (found in review)."""
+    boot(start_node, tmp_path)
+    d = Drive(master)
+    assert drive(stepctl, "enable", "--quiet").returncode == 0
+    r = drive(stepctl, "pp", 20000, "--velocity", 2000, "--no-wait", "--quiet")  # 10 s
+    assert r.returncode == 0, r
+    r = drive(stepctl, "pp", 0, "--no-wait")  # buffered behind it: bit 12 stays 1
+    assert r.returncode == 0 and "buffered" in r.stdout, r
+    assert d.read_u16(STATUSWORD) & (1 << 12)
+    r = drive(stepctl, "pp", 100, "--no-wait", "--wait", 1)
+    assert r.returncode == 1, r
+    line = one_error_line(r)
+    assert "takes no new set-point" in line and "bit 12" in line, line
+    assert "acknowledged" not in r.stdout, r.stdout
+
+
 def test_bad_input_exits_2_before_the_bus(stepctl):
     for args in (("pp",), ("pp", "ten"), ("pp", 1, "--velocity", -1), ("pv", 1, "--axis", 9), ("frobnicate",)):
         r = stepctl("drive", *args, "--node", NODE)
