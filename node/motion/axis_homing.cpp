@@ -26,13 +26,17 @@ void Axis::find_home(int direction, Tick now) {
   // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
   // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
   // the limit is already reached and the search goes on from step 4.
-  if (direction > 0 ? inputs().upper_limit() : inputs().lower_limit()) {
-    if (!limit_qualified_home())
-      return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  const bool at_limit = direction > 0 ? inputs().upper_limit() : inputs().lower_limit();
+  if (at_limit && !limit_qualified_home())
+    return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  // Step 3 stops the search when the home input "becomes active": one already active at the
+  // start satisfies it at once, with no step (a step first would run off a cam whose last
+  // step the axis stands on, to the end limit).
+  if (limit_qualified_home() ? at_limit : origin_active()) {
     job_direction_ = direction;
     core_.claim(*this, now);
     core_.set_dir_output(direction > 0, now);
-    return home_event(now, /*at_limit=*/true);
+    return home_event(now, at_limit);
   }
   start_motion(*ramp, direction, std::nullopt, now);
 }
