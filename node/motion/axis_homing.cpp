@@ -36,6 +36,7 @@ void Axis::find_home(int direction, Tick now) {
     job_direction_ = direction;
     core_.claim(*this, now);
     core_.set_dir_output(direction > 0, now);
+    restart_stall_windows(direction);  // no run of step 2 to judge at the stop (SPM30 5.4)
     return home_event(now, at_limit);
   }
   start_motion(*ramp, direction, std::nullopt, now);
@@ -65,7 +66,9 @@ void Axis::home_event(Tick now, bool at_limit) {
       core_.halt_motion(now);  // step 7: precisely at home
       break;
   }
-  // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach.
+  // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach:
+  // the run that ended is judged for a stall over its last steps (SPM30 5.4).
+  if (stalled_at_motion_end()) return latch(status::kMotorStalled, now);
   if (home_stage_ == HomeStage::Seek && config_.home_method == AxisConfig::HomeMethod::Normal) {
     // Step 4: back at base velocity till the origin is active again. Whether it still is
     // active is decided as each step of that run is due (advance_to), not here at the stop:
@@ -96,6 +99,7 @@ std::optional<Tick> Axis::deadline() const {
 
 void Axis::at_deadline(Tick when) {
   core_.halt_motion(when);
+  if (stalled_at_motion_end()) return latch(status::kMotorStalled, when);  // the step 4-5 run
   home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin
   origin_inactive_since_.reset();
   start_base_run(-job_direction_, when);
