@@ -220,7 +220,10 @@ class Axis final : public FrontEnd, public AxisListener {
   StallWindow stall_short_, stall_long_;
   int stall_direction_ = 0;
   void restart_stall_windows(int direction);
+  bool stall_judged(const StallWindow& window, int64_t counts) const;
   bool stalled_over(StallWindow& window, int64_t counts_per_window);
+  // Whether the motion that just ended stalled over its partly filled windows (then new ones).
+  bool stalled_at_motion_end();
 
   // Per-motor memory for SPM30 axis selection (3.2 SELECT AXIS).
   struct Saved {

@@ -56,19 +56,36 @@ void Axis::restart_stall_windows(int direction) {
   stall_direction_ = direction;
 }
 
+bool Axis::stall_judged(const StallWindow& window, int64_t counts) const {
+  int64_t mlt = config_.encoder_multiplier, div = std::max<int64_t>(config_.encoder_divisor, 1);
+  int64_t measured = std::llabs(counts - window.counts_start);
+  // STP100 6.3.3: a stall when the measured velocity is less than 10 % of the theoretical
+  // one, here over the same commanded steps: measured counts < 10 % of steps * DIV / MLT.
+  // The count difference of a moving encoder is at most one count short of its true
+  // motion, so the test is on measured + 1: a motor at 10 % or more is never a stall, and a
+  // window of 10 expected counts or fewer (10 % under that one count) never is one either.
+  return (measured + 1) * 10 * mlt < window.steps * div;
+}
+
 bool Axis::stalled_over(StallWindow& window, int64_t counts_per_window) {
   // The window spans the commanded steps worth `counts_per_window` encoder counts.
   int64_t mlt = config_.encoder_multiplier, div = std::max<int64_t>(config_.encoder_divisor, 1);
   if (++window.steps * div < counts_per_window * mlt) return false;
   int64_t counts = encoder_counts();
-  int64_t measured = std::llabs(counts - window.counts_start);
-  int64_t commanded_steps = window.steps;
+  bool stalled = stall_judged(window, counts);
   window = StallWindow{0, counts};
-  // STP100 6.3.3: a stall when the measured velocity is less than 10 % of the theoretical
-  // one, here over the same commanded steps: measured counts < 10 % of steps * DIV / MLT.
-  // The count difference of a moving encoder is at most one count short of its true
-  // motion, so the test is on measured + 1: a motor at 10 % or more is never a stall.
-  return (measured + 1) * 10 * mlt < commanded_steps * div;
+  return stalled;
+}
+
+bool Axis::stalled_at_motion_end() {
+  if (!rules_.stall_detection || core_.selected() != 0) return false;
+  // STP100 3.2.3 checks for encoder pulses "after a move is requested", whatever its length:
+  // the partly filled windows of a motion that ended are judged as the full ones are, or a
+  // move (jog, FIND HOME run) shorter than a window would never be checked.
+  int64_t counts = encoder_counts();
+  bool stalled = stall_judged(stall_short_, counts) || stall_judged(stall_long_, counts);
+  restart_stall_windows(stall_direction_);
+  return stalled;
 }
 
 void Axis::check_stall(const Step& step) {

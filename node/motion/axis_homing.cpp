@@ -26,13 +26,18 @@ void Axis::find_home(int direction, Tick now) {
   // SPM30 3.3.1 / 4: an active end limit blocks motion in its direction, so the search
   // takes no step into it: a limit error, or (limit-switch-qualified, STP100 5.3.2 step 3)
   // the limit is already reached and the search goes on from step 4.
-  if (direction > 0 ? inputs().upper_limit() : inputs().lower_limit()) {
-    if (!limit_qualified_home())
-      return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  const bool at_limit = direction > 0 ? inputs().upper_limit() : inputs().lower_limit();
+  if (at_limit && !limit_qualified_home())
+    return latch(direction > 0 ? status::kUpperLimit : status::kLowerLimit, now);
+  // Step 3 stops the search when the home input "becomes active": one already active at the
+  // start satisfies it at once, with no step (a step first would run off a cam whose last
+  // step the axis stands on, to the end limit).
+  if (limit_qualified_home() ? at_limit : origin_active()) {
     job_direction_ = direction;
     core_.claim(*this, now);
     core_.set_dir_output(direction > 0, now);
-    return home_event(now, /*at_limit=*/true);
+    restart_stall_windows(direction);  // no run of step 2 to judge at the stop (SPM30 5.4)
+    return home_event(now, at_limit);
   }
   start_motion(*ramp, direction, std::nullopt, now);
 }
@@ -61,7 +66,9 @@ void Axis::home_event(Tick now, bool at_limit) {
       core_.halt_motion(now);  // step 7: precisely at home
       break;
   }
-  // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach.
+  // Here after a halt in Seek (origin, or limit when qualified) or at the end of Approach:
+  // the run that ended is judged for a stall over its last steps (SPM30 5.4).
+  if (stalled_at_motion_end()) return latch(status::kMotorStalled, now);
   if (home_stage_ == HomeStage::Seek && config_.home_method == AxisConfig::HomeMethod::Normal) {
     // Step 4: back at base velocity till the origin is active again. Whether it still is
     // active is decided as each step of that run is due (advance_to), not here at the stop:
@@ -92,6 +99,7 @@ std::optional<Tick> Axis::deadline() const {
 
 void Axis::at_deadline(Tick when) {
   core_.halt_motion(when);
+  if (stalled_at_motion_end()) return latch(status::kMotorStalled, when);  // the step 4-5 run
   home_stage_ = HomeStage::Approach;  // step 6: reverse, base velocity, to the origin
   origin_inactive_since_.reset();
   start_base_run(-job_direction_, when);

@@ -99,6 +99,8 @@ void Axis::after_step(const Step& step) {
 }
 
 void Axis::finish(Tick now) {
+  // The motion ran out: no step left to stop, but a stall over its last steps is latched.
+  if (stalled_at_motion_end()) return latch(status::kMotorStalled, now);
   Job job = job_;
   end_job(now);
   if (job == Job::None) return;  // the Home a Decelerate and Stop ended (its ramp just ran out)

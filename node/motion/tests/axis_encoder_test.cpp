@@ -24,6 +24,16 @@ class AxisEncoder : public harness::AxisHarness {
     m.encoder = sim::EncoderKind::Quadrature;
     return m;
   }
+  // 50,000 steps/rev and a 1000-line quadrature encoder counted once per line (STP100 Table
+  // 6.1: MLT 50, DIV 1), the load unable to move up past `stall_above`.
+  static sim::AxisMachineConfig fine_steps(int64_t stall_above) {
+    sim::AxisMachineConfig m;
+    m.steps_per_rev = 50000;
+    m.encoder_lines = 1000;
+    m.encoder = sim::EncoderKind::Quadrature;
+    m.stall_above = stall_above;
+    return m;
+  }
   // An SPM30 axis 1 (stall detection follows the tolerance, SPM30 5.4).
   static AxisConfig config(int64_t mlt = 1, int64_t div = 1, int64_t tolerance = 0) {
     AxisConfig c;
@@ -439,6 +449,101 @@ TEST_F(AxisEncoder, Stp100_6_3_3_SlowerButMovingIsNotAStall) {
   EXPECT_FALSE(has(status::kPositionValid));  // 1500 > 255
 }
 
+// ---- A move shorter than a stall window: judged at its end ----------------------------------
+
+// STP100 3.2.3: "the STP100 verifies that encoder feedback pulses are being received after a
+// move is requested. If encoder pulses are not received, the STP100 assumes that the motor is
+// not turning, and sets the Motor Stalled error bit". A 900-step move at MLT 50 / DIV 1
+// (Table 6.1: 50,000 steps, 1000 lines) should give 18 lines, less than a 20-count window;
+// the load is jammed and none come: %I5 at the move's end.
+TEST_F(AxisEncoder, Stp100_3_2_3_JammedMoveShorterThanAWindowIsAStallAtItsEnd) {
+  AxisConfig c = stp100(50, 1, 0, true);
+  c.quadrature_decoding = 1;
+  build(c, fine_steps(/*stall_above=*/0));
+  set_position(0);
+  move_rel(900);
+  walk();
+  EXPECT_EQ(mech(), 0);
+  EXPECT_EQ(axis->encoder_position(), 0);
+  EXPECT_EQ(axis->motor_position(), 900);  // the move ran out: nothing left to stop
+  EXPECT_EQ(errors(), status::kMotorStalled);
+  EXPECT_FALSE(any(status::kMoving));
+}
+
+// The same at one count per step: a jammed 15-step move (15 counts expected, none came).
+TEST_F(AxisEncoder, Stp100_3_2_3_JammedFifteenStepMoveIsAStall) {
+  sim::AxisMachineConfig m = machine();
+  m.stall_above = 0;
+  build(stp100(1, 1, 0, true), m);
+  set_position(0);
+  move_rel(15);
+  walk();
+  EXPECT_EQ(mech(), 0);
+  EXPECT_EQ(errors(), status::kMotorStalled);
+}
+
+// SPM30 5.4: "when ENCODER TOL is non-zero ... the SPM30 uses the encoder feedback pulses to
+// verify motor velocity during motion": the jammed 900-step move at MLT 50 / DIV 1 (5.3).
+TEST_F(AxisEncoder, Spm30_5_4_JammedMoveShorterThanAWindowIsAStallAtItsEnd) {
+  AxisConfig c = config(50, 1, 255);
+  c.quadrature_decoding = 1;
+  build(c, fine_steps(/*stall_above=*/0));
+  set_position(0);
+  move_rel(900);
+  walk();
+  EXPECT_EQ(mech(), 0);
+  EXPECT_FALSE(has(status::kPositionValid));  // |900 - 0| reached 255
+  EXPECT_EQ(errors(), status::kMotorStalled);
+}
+
+// STP100 6.3.3 "less than 10% of the theoretical move velocity" over a move shorter than the
+// long window: one step in 15 (6.7 %) over 900 steps at one count per step is a stall; one
+// in 10 (10 %) is not.
+TEST_F(AxisEncoder, Stp100_6_3_3_ShortMoveIsJudgedByTheTenPercentRuleAtItsEnd) {
+  for (uint32_t n : {15u, 10u}) {
+    sim::AxisMachineConfig m = machine();
+    m.move_every = n;
+    build(stp100(1, 1, 0, true), m);
+    set_position(0);
+    move_rel(900);
+    walk();
+    SCOPED_TRACE(testing::Message() << "1 step in " << n);
+    EXPECT_EQ(mech(), 900 / n);
+    EXPECT_EQ(axis->motor_position(), 900);
+    EXPECT_EQ(errors(), n == 15 ? status::kMotorStalled : 0);
+  }
+}
+
+// A jammed jog shorter than a window: judged when the jog has ramped down and stopped.
+TEST_F(AxisEncoder, Stp100_3_2_3_JammedShortJogIsAStallWhenItStops) {
+  AxisConfig c = stp100(50, 1, 0, true);
+  c.quadrature_decoding = 1;
+  build(c, fine_steps(/*stall_above=*/0));
+  hold(command::kJogUp);
+  wait(500);
+  ASSERT_EQ(errors(), 0);  // under 1000 steps: no full window yet
+  hold(0);
+  walk();
+  EXPECT_GT(axis->motor_position(), 10);
+  EXPECT_LT(axis->motor_position(), 1000);
+  EXPECT_EQ(mech(), 0);
+  EXPECT_EQ(errors(), status::kMotorStalled);
+}
+
+// Under 10 expected counts, 10 % is less than the one count an encoder reading can be short:
+// a jammed 10-step move at one count per step is too short to judge.
+TEST_F(AxisEncoder, Stp100_6_3_3_MoveTooShortToJudgeIsNeverAStall) {
+  sim::AxisMachineConfig m = machine();
+  m.stall_above = 0;
+  build(stp100(1, 1, 0, true), m);
+  set_position(0);
+  move_rel(10);
+  walk();
+  EXPECT_EQ(mech(), 0);
+  EXPECT_EQ(errors(), 0);
+  EXPECT_EQ(axis->motor_position(), 10);
+}
+
 TEST_F(AxisEncoder, Stp100_6_3_3_StallDetectionOffOrNoEncoderNeverLatches) {
   sim::AxisMachineConfig m = machine();
   m.stall_above = 500;
@@ -471,6 +576,22 @@ TEST_F(AxisEncoder, Stp100_6_3_3_StallDuringFindHomeEndsIt) {
   EXPECT_EQ(errors(), status::kMotorStalled);
   EXPECT_FALSE(has(status::kPositionValid));
   EXPECT_EQ(mech(), 3000);
+}
+
+// A FIND HOME run shorter than the long window is judged when it stops: the search reaches
+// the cam 60 steps up at one step in 15 (6.7 %), after 900 commanded steps.
+TEST_F(AxisEncoder, Stp100_6_3_3_SlippingFindHomeSearchIsAStallWhenItStopsOnTheCam) {
+  sim::AxisMachineConfig m = machine();
+  m.home = sim::Cam{60, 40};
+  m.move_every = 15;
+  build(stp100(1, 1, 0, true), m);
+  axis->words().destination = 0;
+  issue(command::kFindHomeUp);
+  walk();
+  EXPECT_EQ(mech(), 60);
+  EXPECT_EQ(axis->motor_position(), 900);
+  EXPECT_EQ(errors(), status::kMotorStalled);
+  EXPECT_FALSE(has(status::kPositionValid));
 }
 
 TEST_F(AxisEncoder, Stp100_4_2_3_1_FindHomeLoadsTheEncoderPosition) {

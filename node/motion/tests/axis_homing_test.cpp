@@ -154,6 +154,28 @@ TEST_F(AxisHoming, Spm30_4_FindHome_StartingOnTheCamBacksOffAndComesBack) {
   expect_homed(5000, 1);  // approached in the search direction: the cam's first step up
 }
 
+// Step 3 "When the axis' home input becomes active, motion is stopped immediately": one
+// already active when the search starts satisfies it at once, with no step, so a start on
+// the cam's last step in the search direction homes as one step lower does (no run off the
+// cam to the end limit), both by steps 4-6 at base velocity.
+TEST_F(AxisHoming, Spm30_4_FindHome_StartingOnTheCamsLastStepsHomesWithoutAStepOffIt) {
+  for (int64_t start : {5038, 5039}) {
+    SCOPED_TRACE(testing::Message() << "from " << start);
+    build();
+    motors[0].displace(start);
+    at(now);
+    ASSERT_TRUE(has(status::kAtHome));
+    home(command::kFindHomeUp, 0);
+    auto s = walk();
+    expect_homed(5000, 0);
+    ASSERT_FALSE(s.empty());
+    int64_t highest = start;
+    for (const auto& x : s) highest = std::max(highest, x.mech);
+    EXPECT_EQ(highest, start);              // no step of the search (step 2)
+    EXPECT_EQ(turns(s, start).size(), 1u);  // down off the cam (4-5), up to it (6)
+  }
+}
+
 // A fast search that overshoots the cam: the load coasts past it after the stop. Step 4
 // ("just in case we shot right past home") runs back at base velocity to the cam.
 TEST_F(AxisHoming, Spm30_4_FindHome_NormalMethodRecoversFromAnOvershoot) {
