@@ -53,7 +53,8 @@ void Drive::velocity_to(int64_t target, Tick now) {
   }
   core_.change_velocity(now, std::llabs(target) * grid_);
   const double v = g.velocity();
-  watch_limit(g.direction(), v, reachable(g.direction(), v, std::llabs(target)), now);
+  watch_limit(g.direction(), v,
+              reachable(g.direction(), v, static_cast<double>(std::llabs(target))), now);
 }
 
 }  // namespace stepnode::cia402
