@@ -326,21 +326,22 @@ void DiscoveryPlan::tpdos_done() {
 void DiscoveryPlan::snapshot_value(const od::Bytes& d) {
   AxisSnapshot& s = info_.snapshot[k_];
   uint32_t v = 0;
+  const size_t size = kSnapshotSizes[entry_];  // the item's data type (type_size())
   switch (kSnapshotOffsets[entry_]) {
     case 0x01:
-      if ((s.status_read = exact_u32(d, 2, v))) s.status_bits = static_cast<uint16_t>(v);
+      if ((s.status_read = exact_u32(d, size, v))) s.status_bits = static_cast<uint16_t>(v);
       break;
     case 0x18:
-      if ((s.done_read = exact_u32(d, 1, v))) s.done_code = static_cast<int8_t>(v);
+      if ((s.done_read = exact_u32(d, size, v))) s.done_code = static_cast<int8_t>(v);
       break;
     case 0x19:
-      if ((s.hp_error_read = exact_u32(d, 1, v))) s.hp_error = static_cast<uint8_t>(v);
+      if ((s.hp_error_read = exact_u32(d, size, v))) s.hp_error = static_cast<uint8_t>(v);
       break;
     case 0x05:
-      if ((s.motor_read = exact_u32(d, 4, v))) s.motor_position = static_cast<int32_t>(v);
+      if ((s.motor_read = exact_u32(d, size, v))) s.motor_position = static_cast<int32_t>(v);
       break;
     case 0x06:
-      if ((s.encoder_read = exact_u32(d, 4, v))) s.encoder_position = static_cast<int32_t>(v);
+      if ((s.encoder_read = exact_u32(d, size, v))) s.encoder_position = static_cast<int32_t>(v);
       break;
   }
 }
@@ -356,25 +357,26 @@ void DiscoveryPlan::next_snapshot() {
 void DiscoveryPlan::drive_snapshot_value(const od::Bytes& d) {
   DriveSnapshot& s = info_.drive_snapshot[k_];
   uint32_t v = 0;
+  const size_t size = kDriveSnapshotSizes[entry_];  // the item's data type (type_size())
   switch (kDriveSnapshotObjects[entry_]) {
     case cia402::obj::kStatusword:
-      if ((s.statusword_read = exact_u32(d, 2, v))) s.statusword = static_cast<uint16_t>(v);
+      if ((s.statusword_read = exact_u32(d, size, v))) s.statusword = static_cast<uint16_t>(v);
       break;
     case cia402::obj::kModesOfOperationDisplay:
-      if ((s.mode_read = exact_u32(d, 1, v))) s.mode_display = static_cast<int8_t>(v);
+      if ((s.mode_read = exact_u32(d, size, v))) s.mode_display = static_cast<int8_t>(v);
       break;
     case cia402::obj::kPositionActual:
-      if ((s.position_read = exact_u32(d, 4, v))) s.position_actual = static_cast<int32_t>(v);
+      if ((s.position_read = exact_u32(d, size, v))) s.position_actual = static_cast<int32_t>(v);
       break;
     case cia402::obj::kVelocityActual:
-      if ((s.velocity_read = exact_u32(d, 4, v))) s.velocity_actual = static_cast<int32_t>(v);
+      if ((s.velocity_read = exact_u32(d, size, v))) s.velocity_actual = static_cast<int32_t>(v);
       break;
     case cia402::obj::kFollowingErrorActual:
-      if ((s.following_error_read = exact_u32(d, 4, v)))
+      if ((s.following_error_read = exact_u32(d, size, v)))
         s.following_error = static_cast<int32_t>(v);
       break;
     case cia402::obj::kErrorCode:
-      if ((s.error_code_read = exact_u32(d, 2, v))) s.error_code = static_cast<uint16_t>(v);
+      if ((s.error_code_read = exact_u32(d, size, v))) s.error_code = static_cast<uint16_t>(v);
       break;
   }
 }

@@ -73,6 +73,15 @@ void HpService::hook(unsigned a, uint16_t offset, uint8_t sub,
   });
 }
 
+void HpService::setting_hook(unsigned a, uint16_t offset, uint8_t sub,
+                             std::function<void(std::span<const uint8_t>)> apply) {
+  hook(a, offset, sub, [this, a, apply = std::move(apply)](std::span<const uint8_t> d) {
+    if (hp::Error e = channels_[a]->setting_command(); e != hp::Error::None) return result(a, e);
+    apply(d);
+    return SdoAbort::None;
+  });
+}
+
 void HpService::install_hooks(unsigned a) {
   install_command_hooks(a);
   install_output_hooks(a);
@@ -129,11 +138,8 @@ void HpService::install_command_hooks(unsigned a) {
   dictionary_.at(index(a, kTrig), 0).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(static_cast<uint8_t>(ch.trig_mode()));
   };
-  hook(kDelay, 0, [this, a, &ch](std::span<const uint8_t> d) {
-    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
-    ch.delay(od::decode<uint16_t>(d));
-    return SdoAbort::None;
-  });
+  setting_hook(a, kDelay, 0,
+               [&ch](std::span<const uint8_t> d) { ch.delay(od::decode<uint16_t>(d)); });
 }
 
 // STANDBY, PULSE, HARDLIM, HALT.
@@ -157,22 +163,18 @@ void HpService::install_output_hooks(unsigned a) {
        });
   for (uint8_t sub : {hp44714a::output_sub::kPulseMode, hp44714a::output_sub::kPstpSense,
                       hp44714a::output_sub::kNdirSense})
-    hook(kOutput, sub, [this, a, out, sub, &ch](std::span<const uint8_t> d) {
-      if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
+    setting_hook(a, kOutput, sub, [this, out, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(out, s); };
       ch.pulse(hp::PulseSetup{static_cast<hp::PulseMode>(get(hp44714a::output_sub::kPulseMode)),
                               get(hp44714a::output_sub::kPstpSense) != 0,
                               get(hp44714a::output_sub::kNdirSense) != 0});
-      return SdoAbort::None;
     });
   uint16_t lim = index(a, kLimits);
   for (uint8_t sub : {hp44714a::limits_sub::kPlimSense, hp44714a::limits_sub::kNlimSense})
-    hook(kLimits, sub, [this, a, lim, sub, &ch](std::span<const uint8_t> d) {
-      if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
+    setting_hook(a, kLimits, sub, [this, lim, sub, &ch](std::span<const uint8_t> d) {
       auto get = [&](uint8_t s) { return s == sub ? u8(d) : dictionary_.get<uint8_t>(lim, s); };
       ch.hardlim(get(hp44714a::limits_sub::kPlimSense) != 0,
                  get(hp44714a::limits_sub::kNlimSense) != 0);
-      return SdoAbort::None;
     });
   hook(kLimits, hp44714a::limits_sub::kHaltMode, [this, &ch](std::span<const uint8_t> d) {
     ch.halt_mode(static_cast<hp::HaltMode>(u8(d)), now());
@@ -208,10 +210,8 @@ void HpService::install_counter_hooks(unsigned a) {
     ch.qscale(real(d));
     return SdoAbort::None;
   });
-  hook(kQuadrature, hp44714a::quad_sub::kQindex, [this, a, &ch](std::span<const uint8_t> d) {
-    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
+  setting_hook(a, kQuadrature, hp44714a::quad_sub::kQindex, [&ch](std::span<const uint8_t> d) {
     ch.qindex(static_cast<hp::QIndexMode>(u8(d)));
-    return SdoAbort::None;
   });
   od.at(q, hp44714a::quad_sub::kQindex).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(static_cast<uint8_t>(ch.qindex_mode()));
@@ -219,11 +219,9 @@ void HpService::install_counter_hooks(unsigned a) {
   od.at(q, hp44714a::quad_sub::kQpos).on_read = [&ch](od::Bytes& v) {
     v = od::encode<double>(ch.qpos_query());
   };
-  hook(kInterrupt, hp44714a::intr_sub::kEnable, [this, a, &ch](std::span<const uint8_t> d) {
-    if (hp::Error e = ch.setting_command(); e != hp::Error::None) return result(a, e);
+  setting_hook(a, kInterrupt, hp44714a::intr_sub::kEnable, [&ch](std::span<const uint8_t> d) {
     if (u8(d)) ch.enable_intr();
     else ch.disable_intr();
-    return SdoAbort::None;
   });
   od.at(index(a, kInterrupt), hp44714a::intr_sub::kEnable).on_read = [&ch](od::Bytes& v) {
     v = od::encode<uint8_t>(ch.intr_enabled() ? 1 : 0);

@@ -47,6 +47,10 @@ class HpService final : public Profile {
   // A reaction on axis a's object `offset`, sub `sub`, publishing the channel after it.
   void hook(unsigned a, uint16_t offset, uint8_t sub,
             std::function<od::SdoAbort(std::span<const uint8_t>)> f);
+  // The hook of a command that only sets a parameter: error 89 while a MOVE or SUSTAIN
+  // without NOWAIT runs (hp::Channel::setting_command), else `apply` and accepted.
+  void setting_hook(unsigned a, uint16_t offset, uint8_t sub,
+                    std::function<void(std::span<const uint8_t>)> apply);
   void apply_stored(unsigned a, motion::Tick t);
   void publish(unsigned a);
   od::SdoAbort result(unsigned a, motion::hp::Error e);
