@@ -25,6 +25,7 @@ void StepGenerator::skip_empty_intervals(int64_t most) {
 
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
                           std::optional<int64_t> distance) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (ramp.s_curve) {
     direction_ = direction >= 0 ? +1 : -1;
@@ -237,16 +238,31 @@ void StepGenerator::end_interval() {
   // s_next() peeked: its own.)
   if (scurve_) [[unlikely]]
     return s_take_known(out);
-  if (ahead_.valid) ahead_.restore(*this);
+  if (ahead_.valid) {
+    if (batch_.count > 0) {
+      // A batch's step: counted, and the next one is the batch's (none of its steps ends
+      // the move or asks for the turn: solve_batch's bounds). The interval's place, the
+      // count in marks_, and after its last the next step follow in sync_batch(), on the
+      // way in of the next peek() or change.
+      const RampBatch::Entry& e = batch_.e[batch_.pos];
+      t_ = e.step, acc_ = e.acc, level_ = e.level;
+      ++steps_done_;
+      out = Step{t_, direction_};
+      peeked_ = ++batch_.pos < batch_.count ? batch_.e[batch_.pos].step : kUnpeeked;
+      return true;
+    }
+    ahead_.restore(*this);
+  }
   const Tick at = peeked_;
-  peeked_ = kUnpeeked;  // the next step may move
   acc_ += level_ * (at - t_) - ramp_.phase_per_step;
   t_ = at;
+  peeked_ = kUnpeeked;  // the next step may move
   return took_step(out);
 }
 
 [[gnu::aligned(64)]] bool StepGenerator::next_unknown(Step& out) {
   ramp_known_.valid = false;  // the motion may change on the way
+  sync_batch();
   if (scurve_) {
     peeked_ = kUnpeeked;  // the next step may move
     return s_next(out);
@@ -290,6 +306,7 @@ void StepGenerator::end_interval() {
 
 std::optional<Tick> StepGenerator::peek_unknown() {
   ramp_known_.valid = false;  // a change may have come since the last step
+  sync_batch();
   // Cached until the motion changes: the axes peek on every tick, and reaching the next
   // step may walk thousands of ramp intervals (a slow ramp from 0 Hz, HP PROFILE FREQ).
   if (scurve_) return phase_ == MotionPhase::Idle ? std::nullopt : s_.p->peek();
@@ -378,6 +395,7 @@ void StepGenerator::advance_to(Tick at) {
 }
 
 void StepGenerator::stop(Tick at) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {
@@ -397,6 +415,7 @@ void StepGenerator::stop(Tick at) {
 }
 
 void StepGenerator::stop(Tick at, Rational decel) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {
@@ -417,6 +436,7 @@ void StepGenerator::stop(Tick at, Rational decel) {
 }
 
 void StepGenerator::halt(Tick at) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   t_ = std::max(t_, at);

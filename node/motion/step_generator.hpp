@@ -31,7 +31,8 @@ class StepGenerator {
   bool next(Step& out) { return peeked_ >= 0 ? take_known(out) : next_unknown(out); }
   // From now on every ramp interval walked one loop turn at a time, none solved (levels at
   // one tick, or many levels before a step), in next() and in the changes of a running
-  // motion (the reference in the tests; peek() still solves what it finds).
+  // motion (the reference in the tests; peek() still solves what it finds, one step at a
+  // time: no batch of them).
   void walk_ramps(bool on) { walked_ = on; }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
@@ -96,6 +97,7 @@ class StepGenerator {
   // An S-curve's peak is folded in when read: its steps keep only the highest slope.
   Marks marks() const {
     Marks m = marks_;
+    if (batch_.count > 0) count_batch_steps(m);
     if (s_peak_slope_ > 0)
       m.peak_level = std::max(m.peak_level, s_level_at(SCurve::velocity_of(s_peak_slope_)));
     return m;
@@ -136,6 +138,9 @@ class StepGenerator {
   // guess: fewer instructions than the walk, and less time (a guess from the square root,
   // a chain of divisions, took 2.3x the walk's time; README "Figures").
   Tick peek_solved(int64_t left, int64_t phase);
+  template <int Dir>
+  Tick solve_batch(int64_t left, int64_t phase, int64_t last, int64_t most);
+  int64_t batch_room() const;
   // Fills ramp_known_ if it is not; false where the cursor is not on the ramp's Z.
   bool know_ramp();
   // Hands the walk's or solve's state `w` over to next() (ahead_) and answers its step.
@@ -193,6 +198,52 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
+  // The next steps of a continuous-slope ramp, kSize of them solved together (solve_batch:
+  // the set-up, the checks of the ramp and the walk's state in registers once for them
+  // all), for next() to take one after another: the motion right after each (its time,
+  // interval end, accumulator and level; `passed` the level changes since the first's
+  // start; the cursor's remainder, carry_top - carry_at·rho: the next carry's remainder
+  // before it took den off, carry_at intervals on, ramp_carry_walk.hpp). take_known()
+  // moves only the time, accumulator and level to a step's; the interval's place follows
+  // when anything else needs it (sync_batch: the ways in after any change, and the end of
+  // the batch). While it holds steps, ahead_.valid is set (take_known's one test). Copied with the
+  // generator: a planner's copy goes on from the same steps.
+  struct RampBatch {
+    static constexpr int kSize = 32;
+    struct Entry {  // no initializers: only e[0, count) is ever read, or copied
+      Tick step, end;
+      int64_t acc, level, passed, carry_at, carry_top;
+    };
+    Entry e[kSize];
+    int pos = 0, count = 0;  // count > 0: e[pos] is the next step (peeked_) while pos < count
+    // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
+    // copy, a planner), most often with none.
+    RampBatch() = default;
+    RampBatch(const RampBatch& o) : pos(o.pos), count(o.count) { std::copy(o.e, o.e + o.count, e); }
+    RampBatch& operator=(const RampBatch& o) {
+      pos = o.pos, count = o.count;
+      std::copy(o.e, o.e + o.count, e);
+      return *this;
+    }
+  };
+  RampBatch batch_;
+  // The motion to the last step taken from batch_, its steps counted in marks_, batch_
+  // emptied.
+  void sync_batch() {
+    if (batch_.count == 0) return;
+    ahead_.valid = false;  // it stood for the batch (take_known)
+    if (batch_.pos > 0) {
+      const RampBatch::Entry& e = batch_.e[batch_.pos - 1];
+      interval_index_ += e.passed, interval_end_ = e.end;
+      cursor_.advance(e.passed, e.carry_top - e.carry_at * cursor_.grid().rho);
+      count_batch_steps(marks_);
+    }
+    batch_.pos = batch_.count = 0;
+  }
+  // Adds the steps taken from batch_ to the ramp's count in `m`.
+  void count_batch_steps(Marks& m) const {
+    (phase_ == MotionPhase::Accelerating ? m.accel_steps : m.decel_steps) += batch_.pos;
+  }
   bool walked_ = false;  // walk_ramps(): every ramp interval walked
   // The levels the last peek's walk or solve passed to its step: a ramp's next step spans
   // nearly as many (the solve's first guess), and from kSolveFrom on it is solved.

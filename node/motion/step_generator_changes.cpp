@@ -8,6 +8,7 @@
 namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (scurve_ && phase_ != MotionPhase::Idle && !stopping_) {
     s_.p->change_velocity(
@@ -55,6 +56,7 @@ void StepGenerator::reached_velocity() {
 }
 
 void StepGenerator::set_level(Tick at, int64_t level) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   leave_s_curve(at);
@@ -69,6 +71,7 @@ void StepGenerator::set_level(Tick at, int64_t level) {
 }
 
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   leave_s_curve(at);
@@ -95,6 +98,7 @@ void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
 }
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
+  sync_batch();         // the motion as it is at its last step
   peeked_ = kUnpeeked;  // the next step may move
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {

@@ -3,6 +3,7 @@
 // step_generator.cpp, whose loop and changes these do not touch.
 #include <algorithm>
 
+#include "node/motion/ramp_carry_walk.hpp"
 #include "node/motion/ramp_step.hpp"
 #include "node/motion/step_generator.hpp"
 
@@ -74,18 +75,84 @@ namespace stepnode::motion {
 // On a 64-byte boundary: see StepGenerator::next_unknown() (step_generator.cpp).
 [[gnu::aligned(64)]] Tick StepGenerator::peek_solved(int64_t left, int64_t phase) {
   // peek_beyond() for a step several levels on: the interval that holds it, solved inline
-  // (ramp_step.hpp solve_to_step; anything else is peek_far()'s).
+  // (ramp_step.hpp solve_to_step; anything else is peek_far()'s), with the steps after it.
   if (!know_ramp()) return kUnpeeked;
   const int64_t dir = ramp_known_.dir;
   const int64_t plain = dir * (ramp_known_.last - level_);
   if (plain <= 0) return kUnpeeked;
   const IntervalGrid g = cursor_.grid();
+  if (ramp_known_.steep) return peek_far(dir, plain);  // levels at one tick (Z < 1)
+  // Every level the batch passes lies between this one and the last plain one, and the
+  // phase to come is below a step's: where those keep the solve in 64 bits, a batch
+  // (not with walk_ramps(): the reference the tests hold the batches to).
+  if (!walked_ && solves_in_64(ramp_.phase_per_step, std::max(level_, ramp_known_.last), g)) {
+    const int64_t most = batch_room();
+    if (most > 0)
+      return dir > 0 ? solve_batch<1>(left, phase, ramp_known_.last, most)
+                     : solve_batch<-1>(left, phase, ramp_known_.last, most);
+  }
   const int64_t after = left - phase;
-  // Levels at one tick (Z < 1), or numbers beyond 64 bits: walk_to_step's.
-  if (ramp_known_.steep || !solves_in_64(after, level_, g)) return peek_far(dir, plain);
+  if (!solves_in_64(after, level_, g)) return peek_far(dir, plain);  // walk_to_step's
   RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
   if (!solve_to_step(w, g, cursor_.z(), dir, plain, after, last_span_)) return kUnpeeked;
   return step_found(w);
+}
+
+int64_t StepGenerator::batch_room() const {
+  // A batch's steps are taken without took_step()'s tests (take_known): neither the move's
+  // last step nor a ramp up's steps that ask decel_needed() may be in it.
+  int64_t most = RampBatch::kSize;
+  if (distance_) most = std::min(most, *distance_ - steps_done_ - 1);
+  if (phase_ == MotionPhase::Accelerating && distance_ && !stopping_)
+    most = std::min(most, decel_check_after_ - steps_done_);
+  return most;
+}
+
+template <int Dir>
+Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64_t most) {
+  // The steps from here on, each in its interval or found beyond it, until `most` are in
+  // (batch_room) or the ramp's last plain level comes before a step.
+  // Beyond: walked from the span of the step before with the next carry passed on
+  // (ramp_carry_walk.hpp), where that span holds a few carries at most; else solved
+  // (solve_to_step, the span as its guess).
+  const int64_t d = ramp_.phase_per_step;
+  const IntervalGrid g = cursor_.grid();
+  const CarryGrid cg(g);
+  const int64_t walked_most = g.rho > 0 ? std::min(kHintedMost, 4 * g.den / g.rho) : kHintedMost;
+  RampBatch::Entry* e = batch_.e;
+  RampBatch::Entry* const full = e + most;
+  Tick s = t_, end = interval_end_;
+  int64_t level = level_, acc = acc_, passed = 0, span = last_span_;
+  NextCarry carry = NextCarry::after(g, cursor_.remainder());
+  for (; e != full; ++e) {
+    if (phase >= left) {  // in this interval
+      const Tick at = s + (left + level - 1) / level;
+      acc += level * (at - s) - d;
+      s = at;
+    } else {
+      RampWalk w{s, end, level, 0, passed, 0};
+      const int64_t room = Dir * (last - level);
+      if (span > walked_most || !walk_from_guess<Dir>(w, carry, cg, room, left - phase, span))
+          [[unlikely]] {
+        w.rem = remainder_before(carry, g);
+        if (!solve_to_step(w, g, cursor_.z(), Dir, room, left - phase, span)) break;
+        carry = NextCarry::after(g, w.rem);
+      }
+      span = w.passed - passed;
+      passed = w.passed, level = w.level, end = w.end;
+      s = w.t + (w.left + level - 1) / level;
+      acc = level * (s - w.t) - w.left;
+    }
+    *e = RampBatch::Entry{s, end, acc, level, passed, carry.at, carry.rem + g.den};
+    left = d - acc;
+    phase = level * (end - s);
+  }
+  const int n = static_cast<int>(e - batch_.e);
+  if (n == 0) return kUnpeeked;
+  last_span_ = span;
+  batch_.count = n;
+  ahead_.valid = true;  // take_known's test: the step is the batch's
+  return batch_.e[0].step;
 }
 
 Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
