@@ -244,11 +244,11 @@ void StepGenerator::end_interval() {
       // the move or asks for the turn: solve_batch's bounds). The interval's place, the
       // count in marks_, and after its last the next step follow in sync_batch(), on the
       // way in of the next peek() or change.
-      const RampBatch::Entry& e = batch_.e[batch_.pos];
-      t_ = e.step, acc_ = e.acc, level_ = e.level;
+      const int i = batch_.pos++;
+      t_ = batch_.step[i], acc_ = batch_.acc[i], level_ = batch_.level[i];
       ++steps_done_;
       out = Step{t_, direction_};
-      peeked_ = ++batch_.pos < batch_.count ? batch_.e[batch_.pos].step : kUnpeeked;
+      peeked_ = batch_.step[i + 1];
       return true;
     }
     ahead_.restore(*this);

@@ -200,29 +200,37 @@ class StepGenerator {
   Ahead ahead_;
   // The next steps of a continuous-slope ramp, kSize of them solved together (solve_batch:
   // the set-up, the checks of the ramp and the walk's state in registers once for them
-  // all), for next() to take one after another: the motion right after each (its time,
-  // interval end, accumulator and level; `passed` the level changes since the first's
-  // start; the cursor's remainder, carry_top - carry_at·rho: the next carry's remainder
-  // before it took den off, carry_at intervals on, ramp_carry_walk.hpp). take_known()
-  // moves only the time, accumulator and level to a step's; the interval's place follows
-  // when anything else needs it (sync_batch: the ways in after any change, and the end of
-  // the batch). While it holds steps, ahead_.valid is set (take_known's one test). Copied with the
+  // all), for next() to take one after another: the motion right after each, its time,
+  // accumulator and level (which take_known() moves to), and the interval's place (which
+  // follows when anything else needs it: sync_batch, on the ways in after any change and
+  // after the batch's last step): the interval's end, `passed` the level changes since the
+  // first's start, the cursor's remainder carry_top - carry_at·rho (the next carry's
+  // remainder before it took den off, carry_at intervals on: ramp_carry_walk.hpp). While
+  // it holds steps, ahead_.valid is set (take_known's one test). Copied with the
   // generator: a planner's copy goes on from the same steps.
   struct RampBatch {
     static constexpr int kSize = 32;
-    struct Entry {  // no initializers: only e[0, count) is ever read, or copied
-      Tick step, end;
-      int64_t acc, level, passed, carry_at, carry_top;
+    struct Place {
+      Tick end;
+      int64_t passed, carry_at, carry_top;
     };
-    Entry e[kSize];
-    int pos = 0, count = 0;  // count > 0: e[pos] is the next step (peeked_) while pos < count
+    // No initializers: only the entries in use are read, or copied. step[count] is
+    // kUnpeeked: after the last, the next peek() comes in by peek_unknown().
+    Tick step[kSize + 1];
+    int64_t acc[kSize], level[kSize];
+    Place place[kSize];
+    int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
     RampBatch() = default;
-    RampBatch(const RampBatch& o) : pos(o.pos), count(o.count) { std::copy(o.e, o.e + o.count, e); }
+    RampBatch(const RampBatch& o) { *this = o; }
     RampBatch& operator=(const RampBatch& o) {
       pos = o.pos, count = o.count;
-      std::copy(o.e, o.e + o.count, e);
+      if (count == 0) return *this;
+      std::copy(o.step, o.step + o.count + 1, step);
+      std::copy(o.acc, o.acc + o.count, acc);
+      std::copy(o.level, o.level + o.count, level);
+      std::copy(o.place, o.place + o.count, place);
       return *this;
     }
   };
@@ -233,7 +241,7 @@ class StepGenerator {
     if (batch_.count == 0) return;
     ahead_.valid = false;  // it stood for the batch (take_known)
     if (batch_.pos > 0) {
-      const RampBatch::Entry& e = batch_.e[batch_.pos - 1];
+      const RampBatch::Place& e = batch_.place[batch_.pos - 1];
       interval_index_ += e.passed, interval_end_ = e.end;
       cursor_.advance(e.passed, e.carry_top - e.carry_at * cursor_.grid().rho);
       count_batch_steps(marks_);

@@ -119,12 +119,11 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   const IntervalGrid g = cursor_.grid();
   const CarryGrid cg(g);
   const int64_t walked_most = g.rho > 0 ? std::min(kHintedMost, 4 * g.den / g.rho) : kHintedMost;
-  RampBatch::Entry* e = batch_.e;
-  RampBatch::Entry* const full = e + most;
+  int n = 0;
   Tick s = t_, end = interval_end_;
   int64_t level = level_, acc = acc_, passed = 0, span = last_span_;
   NextCarry carry = NextCarry::after(g, cursor_.remainder());
-  for (; e != full; ++e) {
+  for (; n < most; ++n) {
     if (phase >= left) {  // in this interval
       const Tick at = s + (left + level - 1) / level;
       acc += level * (at - s) - d;
@@ -143,16 +142,17 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
       s = w.t + (w.left + level - 1) / level;
       acc = level * (s - w.t) - w.left;
     }
-    *e = RampBatch::Entry{s, end, acc, level, passed, carry.at, carry.rem + g.den};
+    batch_.step[n] = s, batch_.acc[n] = acc, batch_.level[n] = level;
+    batch_.place[n] = RampBatch::Place{end, passed, carry.at, carry.rem + g.den};
     left = d - acc;
     phase = level * (end - s);
   }
-  const int n = static_cast<int>(e - batch_.e);
   if (n == 0) return kUnpeeked;
   last_span_ = span;
+  batch_.step[n] = kUnpeeked;
   batch_.count = n;
   ahead_.valid = true;  // take_known's test: the step is the batch's
-  return batch_.e[0].step;
+  return batch_.step[0];
 }
 
 Tick StepGenerator::peek_far(int64_t dir, int64_t plain) {
