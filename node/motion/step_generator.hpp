@@ -225,6 +225,7 @@ class StepGenerator {
     RampBatch() = default;
     RampBatch(const RampBatch& o) { *this = o; }
     RampBatch& operator=(const RampBatch& o) {
+      if (this == &o) return *this;
       pos = o.pos, count = o.count;
       if (count == 0) return *this;
       std::copy(o.step, o.step + o.count + 1, step);
