@@ -201,24 +201,17 @@ class StepGenerator {
   // The next steps of a continuous-slope ramp, kSize of them solved together (solve_batch:
   // the set-up, the checks of the ramp and the walk's state in registers once for them
   // all), for next() to take one after another: the motion right after each, its time,
-  // accumulator and level (which take_known() moves to), and the interval's place (which
-  // follows when anything else needs it: sync_batch, on the ways in after any change and
-  // after the batch's last step): the interval's end, `passed` the level changes since the
-  // first's start, the cursor's remainder carry_top - carry_at·rho (the next carry's
-  // remainder before it took den off, carry_at intervals on: ramp_carry_walk.hpp). While
-  // it holds steps, ahead_.valid is set (take_known's one test). Copied with the
+  // accumulator and level, which take_known() moves to. The interval's place follows when
+  // anything else needs it (sync_batch, on the ways in after any change and after the
+  // batch's last step), from the level alone: in a ramp each interval moves it by one.
+  // While it holds steps, ahead_.valid is set (take_known's one test). Copied with the
   // generator: a planner's copy goes on from the same steps.
   struct RampBatch {
     static constexpr int kSize = 32;
-    struct Place {
-      Tick end;
-      int64_t passed, carry_at, carry_top;
-    };
     // No initializers: only the entries in use are read, or copied. step[count] is
     // kUnpeeked: after the last, the next peek() comes in by peek_unknown().
     Tick step[kSize + 1];
     int64_t acc[kSize], level[kSize];
-    Place place[kSize];
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
@@ -231,24 +224,36 @@ class StepGenerator {
       std::copy(o.step, o.step + o.count + 1, step);
       std::copy(o.acc, o.acc + o.count, acc);
       std::copy(o.level, o.level + o.count, level);
-      std::copy(o.place, o.place + o.count, place);
       return *this;
     }
   };
   RampBatch batch_;
   // The motion to the last step taken from batch_, its steps counted in marks_, batch_
-  // emptied.
+  // emptied. The interval and the cursor stood where the batch began (at the level before
+  // its first step's, level_ now): the p levels passed since are p intervals on, of which
+  // floor((rem + p·rho)/den) carried (ramp_intervals.hpp).
   void sync_batch() {
     if (batch_.count == 0) return;
     ahead_.valid = false;  // it stood for the batch (take_known)
     if (batch_.pos > 0) {
-      const RampBatch::Place& e = batch_.place[batch_.pos - 1];
-      interval_index_ += e.passed, interval_end_ = e.end;
-      cursor_.advance(e.passed, e.carry_top - e.carry_at * cursor_.grid().rho);
+      const int64_t start = batch_level0_;
+      const int64_t p = phase_ == MotionPhase::Accelerating ? level_ - start : start - level_;
+      const IntervalGrid g = cursor_.grid();
+      int64_t reached = 0, carries = 0, rem = 0;
+      if (!__builtin_mul_overflow(p, g.rho, &reached) &&
+          !__builtin_add_overflow(reached, cursor_.remainder(), &reached)) {
+        carries = reached / g.den, rem = reached % g.den;
+      } else {  // in 128 bits: a den near 2^63
+        const __int128 wide = cursor_.remainder() + static_cast<__int128>(p) * g.rho;
+        carries = static_cast<int64_t>(wide / g.den), rem = static_cast<int64_t>(wide % g.den);
+      }
+      interval_index_ += p, interval_end_ += g.q * p + carries;
+      cursor_.advance(p, rem);
       count_batch_steps(marks_);
     }
     batch_.pos = batch_.count = 0;
   }
+  int64_t batch_level0_ = 0;  // the level the batch began at
   // Adds the steps taken from batch_ to the ramp's count in `m`.
   void count_batch_steps(Marks& m) const {
     (phase_ == MotionPhase::Accelerating ? m.accel_steps : m.decel_steps) += batch_.pos;

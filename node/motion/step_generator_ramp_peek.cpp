@@ -121,7 +121,7 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   const int64_t walked_most = g.rho > 0 ? std::min(kHintedMost, 4 * g.den / g.rho) : kHintedMost;
   int n = 0;
   Tick s = t_, end = interval_end_;
-  int64_t level = level_, acc = acc_, passed = 0, span = last_span_;
+  int64_t level = level_, acc = acc_, span = last_span_;
   NextCarry carry = NextCarry::after(g, cursor_.remainder());
   for (; n < most; ++n) {
     if (phase >= left) {  // in this interval
@@ -129,7 +129,7 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
       acc += level * (at - s) - d;
       s = at;
     } else {
-      RampWalk w{s, end, level, 0, passed, 0};
+      RampWalk w{s, end, level, 0, 0, 0};
       const int64_t room = Dir * (last - level);
       if (span > walked_most || !walk_from_guess<Dir>(w, carry, cg, room, left - phase, span))
           [[unlikely]] {
@@ -137,13 +137,11 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
         if (!solve_to_step(w, g, cursor_.z(), Dir, room, left - phase, span)) break;
         carry = NextCarry::after(g, w.rem);
       }
-      span = w.passed - passed;
-      passed = w.passed, level = w.level, end = w.end;
+      span = w.passed, level = w.level, end = w.end;
       s = w.t + (w.left + level - 1) / level;
       acc = level * (s - w.t) - w.left;
     }
     batch_.step[n] = s, batch_.acc[n] = acc, batch_.level[n] = level;
-    batch_.place[n] = RampBatch::Place{end, passed, carry.at, carry.rem + g.den};
     left = d - acc;
     phase = level * (end - s);
   }
@@ -151,6 +149,7 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   last_span_ = span;
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
+  batch_level0_ = level_;
   ahead_.valid = true;  // take_known's test: the step is the batch's
   return batch_.step[0];
 }
