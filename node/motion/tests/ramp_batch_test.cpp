@@ -60,18 +60,10 @@ TEST(CarryWalk, AWalkFromAGuessIsTheLevelWalksOrLeavesTheStepAlone) {
   std::mt19937_64 rng(1714);
   int answered = 0, left_alone = 0;
   for (int i = 0; i < 200'000 && !::testing::Test::HasFailure(); ++i) {
-    const int64_t den = pick(rng, 1, 1'000'000);
-    const int64_t num = pick(rng, den, 200 * den);
-    const IntervalGrid g{num / den, num % den, den};
-    const int dir = rng() % 2 ? 1 : -1;
-    RampWalk start;
-    start.level = pick(rng, 1, int64_t{1} << pick(rng, 0, 19));
-    start.t = pick(rng, 0, 1'000'000);
-    start.end = start.t + pick(rng, 0, g.q + 1);
-    start.left = pick(rng, 1, int64_t{1} << pick(rng, 0, 22));
-    start.rem = pick(rng, 0, den - 1);
-    const int64_t room = dir > 0 ? pick(rng, 1, 1'000'000) : pick(rng, 0, start.level - 1);
-    const int64_t after = start.left - start.level * (start.end - start.t);
+    const walk_check::ProfileWalk r = walk_check::random_profile_walk(rng);
+    const IntervalGrid& g = r.g;
+    const RampWalk& start = r.start;
+    const int64_t dir = r.dir, room = r.room, after = r.after;
     if (after <= 0 || room < 1) continue;
     RampWalk walked = start;
     const bool found = walk_levels(walked, g, dir, room);

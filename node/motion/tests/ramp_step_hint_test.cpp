@@ -34,20 +34,12 @@ TEST(RampWalkHint, AnyHintGivesTheLevelWalksAnswer) {
   std::mt19937_64 rng(44714);
   int spanning = 0, short_of_it = 0;
   for (int i = 0; i < 200'000 && !::testing::Test::HasFailure(); ++i) {
-    const int64_t den = pick(rng, 1, 1'000'000);
-    const int64_t num = pick(rng, den, 200 * den);
-    const IntervalGrid g{num / den, num % den, den};
+    const walk_check::ProfileWalk r = walk_check::random_profile_walk(rng);
+    const IntervalGrid& g = r.g;
+    const RampWalk& start = r.start;
+    const int64_t dir = r.dir, room = r.room, after = r.after;
     const double z =
-        static_cast<double>(g.q) + static_cast<double>(g.rho) / static_cast<double>(den);
-    const int64_t dir = rng() % 2 ? 1 : -1;
-    RampWalk start;
-    start.level = pick(rng, 1, int64_t{1} << pick(rng, 0, 19));
-    start.t = pick(rng, 0, 1'000'000);
-    start.end = start.t + pick(rng, 0, g.q + 1);
-    start.left = pick(rng, 1, int64_t{1} << pick(rng, 0, 22));
-    start.rem = pick(rng, 0, den - 1);
-    const int64_t room = dir > 0 ? pick(rng, 1, 1'000'000) : pick(rng, 0, start.level - 1);
-    const int64_t after = start.left - start.level * (start.end - start.t);
+        static_cast<double>(g.q) + static_cast<double>(g.rho) / static_cast<double>(g.den);
     if (after <= 0 || room < 1) continue;  // the step in this interval, or no room: the caller's
     ASSERT_TRUE(solves_in_64(after, start.level, g));
     RampWalk walked = start;
@@ -56,7 +48,7 @@ TEST(RampWalkHint, AnyHintGivesTheLevelWalksAnswer) {
     RampWalk solved = start;
     const int64_t hint = pick_hint(rng, m);
     EXPECT_EQ(found, solve_to_step(solved, g, z, dir, room, after, hint))
-        << "q " << g.q << " rho " << g.rho << " den " << den << " L " << start.level << " left "
+        << "q " << g.q << " rho " << g.rho << " den " << g.den << " L " << start.level << " left "
         << start.left << " dir " << dir << " hint " << hint << " m " << m;
     expect_same(walked, solved);
     if (m >= 4) ++spanning;
