@@ -18,21 +18,18 @@ namespace stepnode::motion {
 
 // A grid's interval lengths (q, q + 1 at a carry) with its carries' spacing.
 struct CarryGrid {
-  int64_t q = 0, rho = 0, den = 1, qd = 0, rd = 0;
+  int64_t q = 0, rho = 0, qd = 0, rd = 0;
   explicit CarryGrid(const IntervalGrid& g)
-      : q(g.q),
-        rho(g.rho),
-        den(g.den),
-        qd(g.rho > 0 ? g.den / g.rho : 0),
-        rd(g.rho > 0 ? g.den % g.rho : 0) {}
+      : q(g.q), rho(g.rho), qd(g.rho > 0 ? g.den / g.rho : 0), rd(g.rho > 0 ? g.den % g.rho : 0) {}
 };
 
 // The next interval whose remainder carries: `at` intervals after the walk's current one,
-// leaving the remainder `rem` (it reached rem + den there). On a grid without carries
-// (rho = 0, every remainder 0) it stays out of reach, its `rem` -den.
+// leaving the remainder `rem` (it reached rem + den there). after() makes one; on a grid
+// without carries (rho = 0, every remainder 0) it stays out of reach, its `rem` -den (so
+// that remainder_before() is 0).
 struct NextCarry {
   static constexpr int64_t kNone = INT64_MAX / 4;
-  int64_t at = kNone, rem = -1;
+  int64_t at = kNone, rem = 0;
 
   // From `rem`, the remainder after the current interval (one division, where a step is
   // solved otherwise and the walk takes over again).

@@ -25,8 +25,7 @@ void StepGenerator::skip_empty_intervals(int64_t most) {
 
 void StepGenerator::start(const RampSpec& ramp, Tick start, int direction,
                           std::optional<int64_t> distance) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (ramp.s_curve) {
     direction_ = direction >= 0 ? +1 : -1;
     return s_start(ramp, start, distance);
@@ -241,7 +240,7 @@ void StepGenerator::end_interval() {
   if (ahead_.valid) {
     if (batch_.count > 0) {
       // A batch's step: counted, and the next one is the batch's (none of its steps ends
-      // the move or asks for the turn: solve_batch's bounds). The interval's place, the
+      // the move or asks for the turn: batch_room). The interval's place, the
       // count in marks_, and after its last the next step follow in sync_batch(), on the
       // way in of the next peek() or change.
       const int i = batch_.pos++;
@@ -395,8 +394,7 @@ void StepGenerator::advance_to(Tick at) {
 }
 
 void StepGenerator::stop(Tick at) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {
     stopping_ = true;
@@ -415,8 +413,7 @@ void StepGenerator::stop(Tick at) {
 }
 
 void StepGenerator::stop(Tick at, Rational decel) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {
     stopping_ = true;
@@ -436,8 +433,7 @@ void StepGenerator::stop(Tick at, Rational decel) {
 }
 
 void StepGenerator::halt(Tick at) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle) return;
   t_ = std::max(t_, at);
   phase_ = MotionPhase::Idle;

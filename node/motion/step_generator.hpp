@@ -212,6 +212,7 @@ class StepGenerator {
     // kUnpeeked: after the last, the next peek() comes in by peek_unknown().
     Tick step[kSize + 1];
     int64_t acc[kSize], level[kSize];
+    int64_t level0 = 0;      // the level the batch began at
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
@@ -219,7 +220,7 @@ class StepGenerator {
     RampBatch(const RampBatch& o) { *this = o; }
     RampBatch& operator=(const RampBatch& o) {
       if (this == &o) return *this;
-      pos = o.pos, count = o.count;
+      level0 = o.level0, pos = o.pos, count = o.count;
       if (count == 0) return *this;
       std::copy(o.step, o.step + o.count + 1, step);
       std::copy(o.acc, o.acc + o.count, acc);
@@ -236,7 +237,7 @@ class StepGenerator {
     if (batch_.count == 0) return;
     ahead_.valid = false;  // it stood for the batch (take_known)
     if (batch_.pos > 0) {
-      const int64_t start = batch_level0_;
+      const int64_t start = batch_.level0;
       const int64_t p = phase_ == MotionPhase::Accelerating ? level_ - start : start - level_;
       const IntervalGrid g = cursor_.grid();
       int64_t reached = 0, carries = 0, rem = 0;
@@ -253,7 +254,12 @@ class StepGenerator {
     }
     batch_.pos = batch_.count = 0;
   }
-  int64_t batch_level0_ = 0;  // the level the batch began at
+  // A change of the motion (start, stop, halt, a new velocity, level, grid or end): made
+  // to its state at the last step taken, and the next step may move.
+  void begin_change() {
+    sync_batch();
+    peeked_ = kUnpeeked;
+  }
   // Adds the steps taken from batch_ to the ramp's count in `m`.
   void count_batch_steps(Marks& m) const {
     (phase_ == MotionPhase::Accelerating ? m.accel_steps : m.decel_steps) += batch_.pos;

@@ -8,8 +8,7 @@
 namespace stepnode::motion {
 
 void StepGenerator::change_velocity(Tick at, int64_t level, std::optional<RampSpec> then) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (scurve_ && phase_ != MotionPhase::Idle && !stopping_) {
     s_.p->change_velocity(
         at, static_cast<double>(level) * kClockHz / static_cast<double>(ramp_.phase_per_step));
@@ -56,8 +55,7 @@ void StepGenerator::reached_velocity() {
 }
 
 void StepGenerator::set_level(Tick at, int64_t level) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle) return;
   leave_s_curve(at);
   advance_to(at);
@@ -71,8 +69,7 @@ void StepGenerator::set_level(Tick at, int64_t level) {
 }
 
 void StepGenerator::regrid(Tick at, const RampSpec& ramp) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle || distance_ || stopping_) return;
   leave_s_curve(at);
   advance_to(at);
@@ -98,8 +95,7 @@ void StepGenerator::adopt(const RampSpec& ramp, int64_t level) {
 }
 
 void StepGenerator::retarget(Tick at, int64_t steps, const RampSpec& ramp) {
-  sync_batch();         // the motion as it is at its last step
-  peeked_ = kUnpeeked;  // the next step may move
+  begin_change();
   if (phase_ == MotionPhase::Idle) return;
   if (scurve_) {
     distance_ = steps_done_ + std::max<int64_t>(steps, 0);

@@ -118,7 +118,10 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   const int64_t d = ramp_.phase_per_step;
   const IntervalGrid g = cursor_.grid();
   const CarryGrid cg(g);
-  const int64_t walked_most = g.rho > 0 ? std::min(kHintedMost, 4 * g.den / g.rho) : kHintedMost;
+  // A few carries in the span at most (4·den/rho levels; a large den is left unmultiplied).
+  const int64_t walked_most = g.rho > 0 && g.den / g.rho < kHintedMost
+                                  ? std::min(kHintedMost, 4 * g.den / g.rho)
+                                  : kHintedMost;
   int n = 0;
   Tick s = t_, end = interval_end_;
   int64_t level = level_, acc = acc_, span = last_span_;
@@ -149,7 +152,7 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   last_span_ = span;
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
-  batch_level0_ = level_;
+  batch_.level0 = level_;
   ahead_.valid = true;  // take_known's test: the step is the batch's
   return batch_.step[0];
 }

@@ -29,8 +29,8 @@ int64_t pick_hint(std::mt19937_64& rng, int64_t m) {
 }
 
 TEST(RampWalkHint, AnyHintGivesTheLevelWalksAnswer) {
-  // The profiles' grids (Z of 1 to 200 ticks, a fraction of any size), levels up to 10^6,
-  // steps up to 5·10^6 phase units: solves_in_64() holds, as where the generator solves.
+  // The profiles' grids (walk_check::random_profile_walk): solves_in_64() holds, as where
+  // the generator solves.
   std::mt19937_64 rng(44714);
   int spanning = 0, short_of_it = 0;
   for (int i = 0; i < 200'000 && !::testing::Test::HasFailure(); ++i) {
