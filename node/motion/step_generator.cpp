@@ -185,13 +185,18 @@ void StepGenerator::end_interval() {
 [[gnu::always_inline]] inline Tick StepGenerator::peek_plain() {
   // In a ramp, most steps fall in an interval reached by plain level changes (one up or
   // down, the phase unchanged): the step next() takes, found without copying the
-  // generator. Anything else first (the ramp's end, its top): kUnpeeked. The step in this
-  // interval (most of a gentle ramp's, Horner's) here, inlined; one further on is
-  // peek_beyond()'s.
+  // generator. Anything else first (the ramp's end, its top): kUnpeeked. The steps from
+  // here solved in a batch where peek_batch() can (every ramp of the profiles and the
+  // Horner module on their usual grids); else the one step: in this interval here,
+  // inlined; one further on peek_beyond()'s or peek_solved()'s.
   ahead_.valid = false;
   const int64_t left = ramp_.phase_per_step - acc_;  // the phase still to come
   // This interval's phase: far inside int64 where no step falls, below one step's phase.
   const int64_t phase = level_ * (interval_end_ - t_);
+  if (!walked_) {
+    const Tick batched = peek_batch(left, phase);
+    if (batched != kUnpeeked) return batched;
+  }
   if (phase >= left) return t_ + (left + level_ - 1) / level_;
   return last_span_ >= kSolveFrom ? peek_solved(left, phase) : peek_beyond(left, phase);
 }
@@ -218,8 +223,7 @@ void StepGenerator::end_interval() {
   } else if (phase_ == MotionPhase::Running || phase_ == MotionPhase::Creeping) {
     // The step after this one, here, where the state is at hand: the axes peek after
     // every step, and at a constant level that answer is all a peek would compute.
-    ahead_.valid = false;
-    peeked_ = run_step_after();
+    peeked_ = peek_run();
   } else {
     peeked_ = peek_plain();  // in a ramp: the same, through its plain level changes
   }
@@ -237,21 +241,7 @@ void StepGenerator::end_interval() {
   // s_next() peeked: its own.)
   if (scurve_) [[unlikely]]
     return s_take_known(out);
-  if (ahead_.valid) {
-    if (batch_.count > 0) {
-      // A batch's step: counted, and the next one is the batch's (none of its steps ends
-      // the move or asks for the turn: batch_room). The interval's place, the
-      // count in marks_, and after its last the next step follow in sync_batch(), on the
-      // way in of the next peek() or change.
-      const int i = batch_.pos++;
-      t_ = batch_.step[i], acc_ = batch_.acc[i], level_ = batch_.level[i];
-      ++steps_done_;
-      out = Step{t_, direction_};
-      peeked_ = batch_.step[i + 1];
-      return true;
-    }
-    ahead_.restore(*this);
-  }
+  if (ahead_.valid) ahead_.restore(*this);
   const Tick at = peeked_;
   acc_ += level_ * (at - t_) - ramp_.phase_per_step;
   t_ = at;
@@ -313,8 +303,7 @@ std::optional<Tick> StepGenerator::peek_unknown() {
     if (phase_ == MotionPhase::Accelerating || phase_ == MotionPhase::Decelerating) {
       peeked_ = peek_plain();
     } else {
-      ahead_.valid = false;
-      peeked_ = run_step_after();
+      peeked_ = peek_run();
     }
   }
   if (peeked_ == kUnpeeked) {
@@ -326,6 +315,40 @@ std::optional<Tick> StepGenerator::peek_unknown() {
   }
   const Tick at = peeked_ == kCopied ? copied_ : peeked_;
   return at == kNoStep ? std::nullopt : std::optional<Tick>(at);
+}
+
+Tick StepGenerator::peek_run() {
+  // At a constant level (a run, a creep), the next steps in a batch, up to the
+  // deceleration point or the batch's room (not with walk_ramps(): the reference).
+  ahead_.valid = false;
+  // The first batches of a run small, then doubling (the steps counted so far): a run
+  // that a change ends after a few steps (a stop at the top, a move of a few steps at
+  // speed) solves few it does not take.
+  const int64_t counted = phase_ == MotionPhase::Running ? marks_.run_steps : marks_.creep_steps;
+  const int64_t most = walked_ ? 0 : std::min(batch_room(), std::max<int64_t>(counted, 1));
+  if (most <= 0) return run_step_after();
+  const int64_t d = ramp_.phase_per_step, level = level_;
+  const Tick until = phase_ == MotionPhase::Running && decel_tick_ >= 0 ? decel_tick_ : kNever;
+  Tick s = t_;
+  int64_t acc = acc_;
+  int n = 0;
+  // After the first step the accumulator stays below the level (a step falls on the first
+  // tick that passes d), so each step is d / level ticks after the one before, or one more
+  // where the accumulator is below d % level: a Bresenham line, no division on the chain
+  // from step to step.
+  Tick need = (d - acc + level - 1) / level;
+  const int64_t qs = d / level, rs = d % level;
+  for (; n < most && s + need <= until; ++n) {
+    s += need;
+    acc += level * need - d;
+    batch_.step[n] = s, batch_.acc[n] = acc, batch_.level[n] = level;
+    need = qs + (acc < rs ? 1 : 0);
+  }
+  if (n == 0) return kUnpeeked;  // the deceleration point first: next_unknown() turns there
+  batch_.step[n] = kUnpeeked;
+  batch_.count = n;
+  batch_.level0 = level;
+  return batch_.step[0];
 }
 
 Tick StepGenerator::run_step_after() const {
@@ -354,6 +377,31 @@ bool StepGenerator::solve_ramp(Tick until) {
   interval_index_ += w.passed, interval_end_ = w.end;
   cursor_.advance(w.passed, w.rem);
   return true;
+}
+
+void StepGenerator::batch_state() {
+  // The time, accumulator and level are the last step's. In a ramp the interval and the
+  // cursor stood where the batch began (at the level before its first step's): each of
+  // its intervals moves the level by one, so the p levels passed since are p intervals
+  // on, of which floor((rem + p·rho)/den) carried (ramp_intervals.hpp). At a constant
+  // level (a run, a creep) p is 0.
+  acc_ = batch_.acc[batch_.pos - 1], level_ = batch_.level[batch_.pos - 1];
+  const int64_t start = batch_.level0;
+  const int64_t p = phase_ == MotionPhase::Accelerating ? level_ - start : start - level_;
+  if (p > 0) {
+    const IntervalGrid g = cursor_.grid();
+    int64_t reached = 0, carries = 0, rem = 0;
+    if (!__builtin_mul_overflow(p, g.rho, &reached) &&
+        !__builtin_add_overflow(reached, cursor_.remainder(), &reached)) {
+      carries = reached / g.den, rem = reached % g.den;
+    } else {  // in 128 bits: a den near 2^63
+      const __int128 wide = cursor_.remainder() + static_cast<__int128>(p) * g.rho;
+      carries = static_cast<int64_t>(wide / g.den), rem = static_cast<int64_t>(wide % g.den);
+    }
+    interval_index_ += p, interval_end_ += g.q * p + carries;
+    cursor_.advance(p, rem);
+  }
+  count_batch_steps(marks_);
 }
 
 void StepGenerator::Ahead::restore(StepGenerator& g) const {

@@ -28,7 +28,10 @@ class StepGenerator {
   // exactly there; without one it runs until stop() (jog, find home).
   void start(const RampSpec& ramp, Tick start, int direction, std::optional<int64_t> distance);
   // Computes the next step. Returns false when the move has ended (Idle).
-  bool next(Step& out) { return peeked_ >= 0 ? take_known(out) : next_unknown(out); }
+  bool next(Step& out) {
+    if (peeked_ < 0) return next_unknown(out);
+    return batch_.pos < batch_.count ? take_batched(out) : take_known(out);
+  }
   // From now on every ramp interval walked one loop turn at a time, none solved (levels at
   // one tick, or many levels before a step), in next() and in the changes of a running
   // motion (the reference in the tests; peek() still solves what it finds, one step at a
@@ -80,7 +83,7 @@ class StepGenerator {
   bool moving() const { return phase_ != MotionPhase::Idle; }
   bool stopping() const { return moving() && stopping_; }  // stop(): ramping down to end
   // An S-curve's level is computed when read (s_level()), not at every step.
-  int64_t level() const { return scurve_ && s_level_lazy_ ? s_level() : level_; }
+  int64_t level() const { return scurve_ && s_level_lazy_ ? s_level() : trapezoid_level(); }
   double velocity() const { return phase_ == MotionPhase::Idle ? 0.0 : ramp_.velocity_of(level()); }
   int64_t steps_done() const { return steps_done_; }
   std::optional<int64_t> remaining() const;
@@ -104,6 +107,18 @@ class StepGenerator {
   }
 
  private:
+  // The level of a trapezoid's last step: a batch's steps leave level_ behind (sync_batch).
+  int64_t trapezoid_level() const { return batch_.pos > 0 ? batch_.level[batch_.pos - 1] : level_; }
+  // A batch's step: its time and count alone (its accumulator and level follow in
+  // sync_batch, on the way in of the next peek() after the batch or change).
+  bool take_batched(Step& out) {
+    const int i = batch_.pos++;
+    t_ = batch_.step[i];
+    peeked_ = batch_.step[i + 1];
+    ++steps_done_;
+    out = Step{t_, direction_};
+    return true;
+  }
   void begin_decel();
   void adopt(const RampSpec& ramp, int64_t level);
   void reached_velocity();
@@ -128,6 +143,7 @@ class StepGenerator {
   Tick peek_plain();
   Tick peek_beyond(int64_t left, int64_t phase);
   Tick run_step_after() const;
+  Tick peek_run();
   // Levels peek_plain() walks one at a time before it solves the rest: a few are faster
   // walked (the solve's divisions and square root cost more cycles than ~30 additions),
   // many far faster solved. Measured with ramp_cost_bench (README "Figures").
@@ -138,6 +154,7 @@ class StepGenerator {
   // guess: fewer instructions than the walk, and less time (a guess from the square root,
   // a chain of divisions, took 2.3x the walk's time; README "Figures").
   Tick peek_solved(int64_t left, int64_t phase);
+  Tick peek_batch(int64_t left, int64_t phase);
   template <int Dir>
   Tick solve_batch(int64_t left, int64_t phase, int64_t last, int64_t most);
   int64_t batch_room() const;
@@ -198,14 +215,14 @@ class StepGenerator {
     void restore(StepGenerator& g) const;
   };
   Ahead ahead_;
-  // The next steps of a continuous-slope ramp, kSize of them solved together (solve_batch:
-  // the set-up, the checks of the ramp and the walk's state in registers once for them
-  // all), for next() to take one after another: the motion right after each, its time,
-  // accumulator and level, which take_known() moves to. The interval's place follows when
-  // anything else needs it (sync_batch, on the ways in after any change and after the
-  // batch's last step), from the level alone: in a ramp each interval moves it by one.
-  // While it holds steps, ahead_.valid is set (take_known's one test). Copied with the
-  // generator: a planner's copy goes on from the same steps.
+  // The next steps of a trapezoid, up to kSize of them solved together: in a ramp by
+  // solve_batch (the set-up, the checks of the ramp and the walk's state in registers once
+  // for them all), at a constant level by peek_run. next() takes them one after another
+  // (take_batched: the time and the count alone). The motion right after each (its
+  // accumulator and level, and in a ramp the interval's place, from the level alone: each
+  // interval moves it by one) follows when anything else needs it (sync_batch, on the
+  // ways in after any change and after the batch's last step). Copied with the generator:
+  // a planner's copy goes on from the same steps.
   struct RampBatch {
     static constexpr int kSize = 32;
     // No initializers: only the entries in use are read, or copied. step[count] is
@@ -230,30 +247,13 @@ class StepGenerator {
   };
   RampBatch batch_;
   // The motion to the last step taken from batch_, its steps counted in marks_, batch_
-  // emptied. The interval and the cursor stood where the batch began (at the level before
-  // its first step's, level_ now): the p levels passed since are p intervals on, of which
-  // floor((rem + p·rho)/den) carried (ramp_intervals.hpp).
+  // emptied (batch_state(), at the next peek() after its last step or a change).
   void sync_batch() {
     if (batch_.count == 0) return;
-    ahead_.valid = false;  // it stood for the batch (take_known)
-    if (batch_.pos > 0) {
-      const int64_t start = batch_.level0;
-      const int64_t p = phase_ == MotionPhase::Accelerating ? level_ - start : start - level_;
-      const IntervalGrid g = cursor_.grid();
-      int64_t reached = 0, carries = 0, rem = 0;
-      if (!__builtin_mul_overflow(p, g.rho, &reached) &&
-          !__builtin_add_overflow(reached, cursor_.remainder(), &reached)) {
-        carries = reached / g.den, rem = reached % g.den;
-      } else {  // in 128 bits: a den near 2^63
-        const __int128 wide = cursor_.remainder() + static_cast<__int128>(p) * g.rho;
-        carries = static_cast<int64_t>(wide / g.den), rem = static_cast<int64_t>(wide % g.den);
-      }
-      interval_index_ += p, interval_end_ += g.q * p + carries;
-      cursor_.advance(p, rem);
-      count_batch_steps(marks_);
-    }
+    if (batch_.pos > 0) batch_state();
     batch_.pos = batch_.count = 0;
   }
+  void batch_state();
   // A change of the motion (start, stop, halt, a new velocity, level, grid or end): made
   // to its state at the last step taken, and the next step may move.
   void begin_change() {
@@ -262,7 +262,12 @@ class StepGenerator {
   }
   // Adds the steps taken from batch_ to the ramp's count in `m`.
   void count_batch_steps(Marks& m) const {
-    (phase_ == MotionPhase::Accelerating ? m.accel_steps : m.decel_steps) += batch_.pos;
+    switch (phase_) {
+      case MotionPhase::Accelerating: m.accel_steps += batch_.pos; break;
+      case MotionPhase::Decelerating: m.decel_steps += batch_.pos; break;
+      case MotionPhase::Running: m.run_steps += batch_.pos; break;
+      default: m.creep_steps += batch_.pos; break;
+    }
   }
   bool walked_ = false;  // walk_ramps(): every ramp interval walked
   // The levels the last peek's walk or solve passed to its step: a ramp's next step spans

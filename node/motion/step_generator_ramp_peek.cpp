@@ -82,15 +82,6 @@ namespace stepnode::motion {
   if (plain <= 0) return kUnpeeked;
   const IntervalGrid g = cursor_.grid();
   if (ramp_known_.steep) return peek_far(dir, plain);  // levels at one tick (Z < 1)
-  // Every level the batch passes lies between this one and the last plain one, and the
-  // phase to come is below a step's: where those keep the solve in 64 bits, a batch
-  // (not with walk_ramps(): the reference the tests hold the batches to).
-  if (!walked_ && solves_in_64(ramp_.phase_per_step, std::max(level_, ramp_known_.last), g)) {
-    const int64_t most = batch_room();
-    if (most > 0)
-      return dir > 0 ? solve_batch<1>(left, phase, ramp_known_.last, most)
-                     : solve_batch<-1>(left, phase, ramp_known_.last, most);
-  }
   const int64_t after = left - phase;
   if (!solves_in_64(after, level_, g)) return peek_far(dir, plain);  // walk_to_step's
   RampWalk w{t_, interval_end_, level_, 0, 0, cursor_.remainder()};
@@ -98,9 +89,23 @@ namespace stepnode::motion {
   return step_found(w);
 }
 
+Tick StepGenerator::peek_batch(int64_t left, int64_t phase) {
+  // The next steps of a ramp in a batch, where its conditions hold: the cursor on the
+  // ramp's Z, not steep, and every level the batch passes (between this one and the last
+  // plain one) keeping the solve in 64 bits with a phase to come below a step's. Else
+  // kUnpeeked: the step is found alone.
+  if (!know_ramp() || ramp_known_.steep) return kUnpeeked;
+  const int64_t last = ramp_known_.last;
+  if (!solves_in_64(ramp_.phase_per_step, std::max(level_, last), cursor_.grid())) return kUnpeeked;
+  const int64_t most = batch_room();
+  if (most <= 0) return kUnpeeked;
+  return ramp_known_.dir > 0 ? solve_batch<1>(left, phase, last, most)
+                             : solve_batch<-1>(left, phase, last, most);
+}
+
 int64_t StepGenerator::batch_room() const {
-  // A batch's steps are taken without took_step()'s tests (take_known): neither the move's
-  // last step nor a ramp up's steps that ask decel_needed() may be in it.
+  // A batch's steps are taken without took_step()'s tests (take_batched): neither the
+  // move's last step nor a ramp up's steps that ask decel_needed() may be in it.
   int64_t most = RampBatch::kSize;
   if (distance_) most = std::min(most, *distance_ - steps_done_ - 1);
   if (phase_ == MotionPhase::Accelerating && distance_ && !stopping_)
@@ -134,7 +139,9 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
     } else {
       RampWalk w{s, end, level, 0, 0, 0};
       const int64_t room = Dir * (last - level);
-      if (span > walked_most || !walk_from_guess<Dir>(w, carry, cg, room, left - phase, span))
+      if (room <= 0) break;  // the ramp's top or end first: next_unknown() turns there
+      const int64_t guess = std::max<int64_t>(span, 1);
+      if (span > walked_most || !walk_from_guess<Dir>(w, carry, cg, room, left - phase, guess))
           [[unlikely]] {
         w.rem = remainder_before(carry, g);
         if (!solve_to_step(w, g, cursor_.z(), Dir, room, left - phase, span)) break;
@@ -153,7 +160,6 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
   batch_.level0 = level_;
-  ahead_.valid = true;  // take_known's test: the step is the batch's
   return batch_.step[0];
 }
 

@@ -178,7 +178,7 @@ double StepGenerator::steps_to_stop() const {
   if (phase_ == MotionPhase::Idle) return 0;
   if (scurve_) return s_.p->steps_to_stop(t_);
   const auto levels =  // the ramp down's whole steps, far inside int64
-      static_cast<int64_t>(ramp_.decel_phase(level_) / ramp_.phase_per_step);
+      static_cast<int64_t>(ramp_.decel_phase(trapezoid_level()) / ramp_.phase_per_step);
   return static_cast<double>(levels);
 }
 

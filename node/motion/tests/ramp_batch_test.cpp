@@ -92,9 +92,17 @@ TEST(CarryWalk, AWalkFromAGuessIsTheLevelWalksOrLeavesTheStepAlone) {
   EXPECT_GT(left_alone, 1'000);
 }
 
-// A continuous-slope ramp, as the HP channel's and the CiA 402 profiles' grids.
-RampSpec slope_ramp(std::mt19937_64& rng) {
-  if (rng() % 2 == 0)
+// A ramp as the generator batches them: a continuous slope on the HP channel's or the CiA
+// 402 profiles' grids, or a Horner module's (whole ticks per level, most steps in the
+// interval of the one before).
+RampSpec batched_ramp(std::mt19937_64& rng) {
+  const uint64_t kind = rng() % 3;
+  if (kind == 2) {
+    const int64_t base = pick(rng, 1, 4'000);
+    return horner_ramp(pick(rng, 20, 65'535), base, pick(rng, base + 1, 8'191),
+                       pick(rng, 1, 27'300), pick(rng, 0, 27'300));
+  }
+  if (kind == 0)
     return frequency_ramp(pick(rng, 0, 50), pick(rng, 500, 40'000),
                           pick(rng, 10'000'000, 2'000'000'000));
   const int64_t accel = pick(rng, 2'000, 2'000'000), decel = pick(rng, 2'000, 2'000'000);
@@ -145,7 +153,7 @@ TEST(RampBatch, EveryStepLeavesTheMotionAsOneStepAtATime) {
   std::mt19937_64 rng(2611);
   int64_t steps = 0, changes = 0;
   for (int move = 0; move < 300 && !::testing::Test::HasFailure(); ++move) {
-    const RampSpec r = slope_ramp(rng);
+    const RampSpec r = batched_ramp(rng);
     const std::optional<int64_t> distance =
         rng() % 3 ? std::optional<int64_t>(pick(rng, 50, 6'000)) : std::nullopt;
     StepGenerator batched, alone;
