@@ -236,11 +236,9 @@ void StepGenerator::end_interval() {
 // them, the same code took 5-9 % more user time (Horner's ramps in ramp_cost_bench; README
 // "Figures").
 [[gnu::aligned(64)]] bool StepGenerator::take_known(Step& out) {
-  // The step peek_plain() or run_step_after() found, in this interval (or ahead_'s) and
-  // before any turn: taken without the loop's tests and division. (An S-curve's, which
-  // s_next() peeked: its own.)
-  if (scurve_) [[unlikely]]
-    return s_take_known(out);
+  // The step peek_plain() or run_step_after() found alone (not in a batch), in this
+  // interval (or ahead_'s) and before any turn: taken without the loop's tests and
+  // division. (An S-curve's, which s_next() peeked: s_take_known().)
   if (ahead_.valid) ahead_.restore(*this);
   const Tick at = peeked_;
   acc_ += level_ * (at - t_) - ramp_.phase_per_step;
@@ -321,11 +319,10 @@ Tick StepGenerator::peek_run() {
   // At a constant level (a run, a creep), the next steps in a batch, up to the
   // deceleration point or the batch's room (not with walk_ramps(): the reference).
   ahead_.valid = false;
-  // The first batches of a run small, then doubling (the steps counted so far): a run
-  // that a change ends after a few steps (a stop at the top, a move of a few steps at
-  // speed) solves few it does not take.
-  const int64_t counted = phase_ == MotionPhase::Running ? marks_.run_steps : marks_.creep_steps;
-  const int64_t most = walked_ ? 0 : std::min(batch_room(), std::max<int64_t>(counted, 1));
+  // The first batch at the top of a ramp short: a motion is often changed as it reaches
+  // its velocity (a stop at the top, the next set-point), and would leave the rest untaken.
+  int64_t most = walked_ ? 0 : batch_room();
+  if (phase_ == MotionPhase::Running && marks_.run_steps <= 1) most = std::min<int64_t>(most, 4);
   if (most <= 0) return run_step_after();
   const int64_t d = ramp_.phase_per_step, level = level_;
   const Tick until = phase_ == MotionPhase::Running && decel_tick_ >= 0 ? decel_tick_ : kNever;

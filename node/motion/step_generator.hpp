@@ -30,7 +30,8 @@ class StepGenerator {
   // Computes the next step. Returns false when the move has ended (Idle).
   bool next(Step& out) {
     if (peeked_ < 0) return next_unknown(out);
-    return batch_.pos < batch_.count ? take_batched(out) : take_known(out);
+    if (batch_.pos < batch_.count) return take_batched(out);
+    return scurve_ ? s_take_known(out) : take_known(out);
   }
   // From now on every ramp interval walked one loop turn at a time, none solved (levels at
   // one tick, or many levels before a step), in next() and in the changes of a running
