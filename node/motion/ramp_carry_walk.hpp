@@ -44,6 +44,13 @@ struct NextCarry {
     at += g.qd + (longer ? 1 : 0);
     rem += (longer ? g.rho : 0) - g.rd;
   }
+  // Back to the carry before this one (pass() undone: a longer gap left rem at rho - rd or
+  // above, a shorter one below).
+  void unpass(const CarryGrid& g) {
+    const bool longer = rem >= g.rho - g.rd;
+    at -= g.qd + (longer ? 1 : 0);
+    rem -= (longer ? g.rho : 0) - g.rd;
+  }
 };
 
 // How far walk_from_guess walks past its guess before it leaves the step to solve_to_step:
@@ -74,15 +81,16 @@ template <int Dir>
   int64_t j = std::min(guess, room), n = j - 1, carries = 0;
   // n·L + Dir·n(n+1)/2 = n·(2L + Dir·(n + 1))/2, its numerator even
   int64_t before = q * ((n * (2 * level + Dir * (n + 1))) >> 1);
-  NextCarry k = c, below = c;  // the next carry after n, and the one before it
+  NextCarry k = c;  // the next carry after n
   for (; k.at <= n; ++carries) {
     before += level + Dir * k.at;
-    below = k;
     k.pass(g);
   }
   if (before >= left) {  // the step is in an earlier interval: one down, or solved
     if (n < 1) return false;
-    const bool carry = below.at == n;
+    NextCarry below = k;  // the carry before k, if interval n is one
+    if (carries > 0) below.unpass(g);
+    const bool carry = carries > 0 && below.at == n;
     before -= (level + Dir * n) * (q + (carry ? 1 : 0));
     if (before >= left) return false;
     --j;
