@@ -205,12 +205,7 @@ void StepGenerator::end_interval() {
 [[gnu::always_inline]] inline bool StepGenerator::took_step(Step& out) {
   // The step at t_ is taken: counted, and what follows it decided.
   ++steps_done_;
-  switch (phase_) {
-    case MotionPhase::Accelerating: ++marks_.accel_steps; break;
-    case MotionPhase::Running: ++marks_.run_steps; break;
-    case MotionPhase::Decelerating: ++marks_.decel_steps; break;
-    default: ++marks_.creep_steps; break;
-  }
+  ++phase_steps(marks_);
   out = Step{t_, direction_};
   if (distance_ && steps_done_ >= *distance_) {
     phase_ = MotionPhase::Idle;

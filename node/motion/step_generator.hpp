@@ -224,7 +224,7 @@ class StepGenerator {
   // interval moves it by one) follows when anything else needs it (sync_batch, on the
   // ways in after any change and after the batch's last step). Copied with the generator:
   // a planner's copy goes on from the same steps.
-  struct RampBatch {
+  struct StepBatch {
     static constexpr int kSize = 32;
     // No initializers: only the entries in use are read, or copied. step[count] is
     // kUnpeeked: after the last, the next peek() comes in by peek_unknown().
@@ -234,9 +234,9 @@ class StepGenerator {
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
-    RampBatch() = default;
-    RampBatch(const RampBatch& o) { *this = o; }
-    RampBatch& operator=(const RampBatch& o) {
+    StepBatch() = default;
+    StepBatch(const StepBatch& o) { *this = o; }
+    StepBatch& operator=(const StepBatch& o) {
       if (this == &o) return *this;
       level0 = o.level0, pos = o.pos, count = o.count;
       if (count == 0) return *this;
@@ -246,7 +246,7 @@ class StepGenerator {
       return *this;
     }
   };
-  RampBatch batch_;
+  StepBatch batch_;
   // The motion to the last step taken from batch_, its steps counted in marks_, batch_
   // emptied (batch_state(), at the next peek() after its last step or a change).
   void sync_batch() {
@@ -261,15 +261,17 @@ class StepGenerator {
     sync_batch();
     peeked_ = kUnpeeked;
   }
-  // Adds the steps taken from batch_ to the ramp's count in `m`.
-  void count_batch_steps(Marks& m) const {
+  // The count in `m` of the steps taken in the current phase.
+  int64_t& phase_steps(Marks& m) const {
     switch (phase_) {
-      case MotionPhase::Accelerating: m.accel_steps += batch_.pos; break;
-      case MotionPhase::Decelerating: m.decel_steps += batch_.pos; break;
-      case MotionPhase::Running: m.run_steps += batch_.pos; break;
-      default: m.creep_steps += batch_.pos; break;
+      case MotionPhase::Accelerating: return m.accel_steps;
+      case MotionPhase::Running: return m.run_steps;
+      case MotionPhase::Decelerating: return m.decel_steps;
+      default: return m.creep_steps;
     }
   }
+  // Adds the steps taken from batch_ to its phase's count in `m`.
+  void count_batch_steps(Marks& m) const { phase_steps(m) += batch_.pos; }
   bool walked_ = false;  // walk_ramps(): every ramp interval walked
   // The levels the last peek's walk or solve passed to its step: a ramp's next step spans
   // nearly as many (the solve's first guess), and from kSolveFrom on it is solved.

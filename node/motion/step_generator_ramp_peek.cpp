@@ -106,7 +106,7 @@ Tick StepGenerator::peek_batch(int64_t left, int64_t phase) {
 int64_t StepGenerator::batch_room() const {
   // A batch's steps are taken without took_step()'s tests (take_batched): neither the
   // move's last step nor a ramp up's steps that ask decel_needed() may be in it.
-  int64_t most = RampBatch::kSize;
+  int64_t most = StepBatch::kSize;
   if (distance_) most = std::min(most, *distance_ - steps_done_ - 1);
   if (phase_ == MotionPhase::Accelerating && distance_ && !stopping_)
     most = std::min(most, decel_check_after_ - steps_done_);
