@@ -9,7 +9,9 @@
 // with the exact integers. From one step to the next the cubic is kept moved to the last
 // step's tick (s_curve_local.cpp), so a step costs a short Newton solve and two exact
 // evaluations of a cubic at a small offset; the full search takes over where that does
-// not decide (a segment's end, a replan, an estimate more than a tick off). At a constant
+// not decide (a segment's end, a replan, an estimate more than a tick off). The generator
+// takes most of a ramp's steps in batches (s_curve_batch.cpp): found in doubles from one
+// exact place, each proven by an error bound, no 128-bit product a step. At a constant
 // velocity (a cruise, a held velocity, a creep) a step is a Bresenham line's instead
 // (s_curve_even.cpp): two additions and a compare. Position and velocity
 // are continuous; at a segment end the acceleration may jump by less than one tick of jerk (the
@@ -84,6 +86,20 @@ class SCurve {
   // Steps from here to standstill with the deceleration ramp (the motion stops there).
   double steps_to_stop(Tick at) const;
 
+  // A batch (s_curve_batch.cpp): up to `most` of the steps after the last one, those in
+  // its segment while it has acceleration or jerk (the quick search's place), into `out`;
+  // 0 where there is none. Never the motion's last step. The motion does not move until
+  // take_batch() takes the first k of them (k >= 1, `steps` the batch's ticks).
+  int batch(Tick* out, int most) const;
+  void take_batch(const Tick* steps, int k);
+  // S dp/dtau at a batched step's tick (its segment is the last step's), and the highest
+  // at the first k of them.
+  __int128 slope_at(Tick t) const {
+    const Segment& g = segs_[seg_];
+    return g.slope(t - g.start);
+  }
+  __int128 peak_slope(const Tick* steps, int k) const;
+
  private:
   struct Segment {
     Tick start = 0;
@@ -103,6 +119,9 @@ class SCurve {
     __int128 p = 0, v = 0, a = 0;  // S p, S dp/dτ, S d2p/dτ2 / 2 (c0, c1, c2 of a segment here)
   };
   static constexpr Tick kOpen = INT64_MAX / 4;
+  // The longest step the quick search and a batch take (2^40 ticks, 62 hours): the exact
+  // rise stays far inside 128 bits in a segment without jerk (one with jerk is shorter).
+  static constexpr Tick kLongestStep = Tick{1} << 40;
   static constexpr int kMaxSegments = 12;
 
   State state_at(Tick at) const;

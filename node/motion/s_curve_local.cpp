@@ -11,17 +11,9 @@
 #include "node/motion/s_curve_scale.hpp"
 
 namespace stepnode::motion {
-namespace {
-
 using scurve::approx;
 using scurve::kS;
-
-// The longest step the quick search takes (2^40 ticks, 62 hours): the exact rise stays far
-// inside 128 bits in a segment without jerk (one with jerk is shorter).
-constexpr Tick kLongest = Tick{1} << 40;
-constexpr double kSd = static_cast<double>(kS);
-
-}  // namespace
+using scurve::kSd;
 
 int SCurve::try_step(const Local& l, const Segment& g, Tick d, Local& n) {
   // d against the exact cubic: -1 the step lies beyond, +1 before, 0 it is d (n the cubic
@@ -50,7 +42,7 @@ std::optional<Tick> SCurve::quick() {
   if (l.seg < 0 || ended_ || (distance_ && steps_ >= *distance_)) return std::nullopt;
   const Segment& g = segs_[l.seg];
   if (l.seg == even_.seg) return even_step(l, g);  // a constant velocity (s_curve_even.cpp)
-  const Tick room = std::min(g.len - l.tau, kLongest);
+  const Tick room = std::min(g.len - l.tau, kLongestStep);
   if (l.left < l.gap) return std::nullopt;  // the segment ends below: the full search skips it
   // Newton from where the last two intervals point (within a fraction of a tick while the
   // velocity changes smoothly).

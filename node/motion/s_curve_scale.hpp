@@ -8,6 +8,7 @@
 namespace stepnode::motion::scurve {
 
 inline constexpr __int128 kS = static_cast<__int128>(6) * kClockHz * kClockHz * kClockHz;
+inline constexpr double kSd = static_cast<double>(kS);
 inline constexpr double kV = 6.0 * static_cast<double>(kClockHz) * static_cast<double>(kClockHz);
 
 // An estimate of a large integer in a double without the library's exact conversion

@@ -372,6 +372,7 @@ bool StepGenerator::solve_ramp(Tick until) {
 }
 
 void StepGenerator::batch_state() {
+  if (scurve_) return s_batch_state();
   // The time, accumulator and level are the last step's. In a ramp the interval and the
   // cursor stood where the batch began (at the level before its first step's): each of
   // its intervals moves the level by one, so the p levels passed since are p intervals

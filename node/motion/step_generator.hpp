@@ -36,7 +36,7 @@ class StepGenerator {
   // From now on every ramp interval walked one loop turn at a time, none solved (levels at
   // one tick, or many levels before a step), in next() and in the changes of a running
   // motion (the reference in the tests; peek() still solves what it finds, one step at a
-  // time: no batch of them).
+  // time: no batch of them, nor of an S-curve's steps).
   void walk_ramps(bool on) { walked_ = on; }
   // The time the next step would fall, without taking it (nullopt when idle).
   std::optional<Tick> peek() {
@@ -101,9 +101,12 @@ class StepGenerator {
   // An S-curve's peak is folded in when read: its steps keep only the highest slope.
   Marks marks() const {
     Marks m = marks_;
-    if (batch_.count > 0) count_batch_steps(m);
-    if (s_peak_slope_ > 0)
-      m.peak_level = std::max(m.peak_level, s_level_at(SCurve::velocity_of(s_peak_slope_)));
+    if (scurve_) {
+      const __int128 peak = s_peak_slope();
+      if (peak > 0) m.peak_level = std::max(m.peak_level, s_level_at(SCurve::velocity_of(peak)));
+    } else if (batch_.count > 0) {
+      count_batch_steps(m);
+    }
     return m;
   }
 
@@ -177,6 +180,14 @@ class StepGenerator {
   // conversions and the scale all rise with the slope, so the peak is the highest slope's
   // level (not holding the target: the level is the slope's), found when marks() is read.
   void s_track_peak() { s_peak_slope_ = std::max(s_peak_slope_, s_.p->slope()); }
+  // With the steps taken from a batch (SCurve::batch: in one segment, its slope at each
+  // computed when read).
+  __int128 s_peak_slope() const {
+    if (batch_.pos == 0 || s_at_target_) return s_peak_slope_;
+    return std::max(s_peak_slope_, s_.p->peak_slope(batch_.step, batch_.pos));
+  }
+  void s_peek_after_step();
+  void s_batch_state();
   int64_t s_level() const;
   int64_t s_level_at(double velocity) const;
   void s_fold_peak();
@@ -218,8 +229,9 @@ class StepGenerator {
   Ahead ahead_;
   // The next steps of a trapezoid, up to kSize of them solved together: in a ramp by
   // solve_batch (the set-up, the checks of the ramp and the walk's state in registers once
-  // for them all), at a constant level by peek_run. next() takes them one after another
-  // (take_batched: the time and the count alone). The motion right after each (its
+  // for them all), at a constant level by peek_run. (Or an S-curve's in one segment, by
+  // SCurve::batch: their times alone, the S-curve moved on in s_batch_state.) next() takes them one
+  // after another (take_batched: the time and the count alone). The motion right after each (its
   // accumulator and level, and in a ramp the interval's place, from the level alone: each
   // interval moves it by one) follows when anything else needs it (sync_batch, on the
   // ways in after any change and after the batch's last step). Copied with the generator:

@@ -93,7 +93,9 @@ int64_t StepGenerator::s_level() const {
   // millionths); otherwise the velocity at the last step. The S-curve's state is the one
   // the last step or change left (peek() does not move it).
   const SCurve& s = *s_.p;
-  return s_level_at(s.at_target_velocity() ? s.target_velocity() : s.velocity());
+  if (s.at_target_velocity()) return s_level_at(s.target_velocity());
+  if (batch_.pos > 0) return s_level_at(SCurve::velocity_of(s.slope_at(t_)));  // batch's
+  return s_level_at(s.velocity());
 }
 
 int64_t StepGenerator::s_level_at(double velocity) const {
@@ -152,10 +154,30 @@ bool StepGenerator::s_next(Step& out) {
   } else if (!s_at_target_) {
     s_track_peak();
   }
-  // The step after this one, here (the axes peek after every step): peek() answers it
-  // inline; next() takes it through take_known(), which hands it back here.
-  if (phase_ != MotionPhase::Idle) peeked_ = s.peek().value_or(kNoStep);
+  if (phase_ != MotionPhase::Idle) s_peek_after_step();
   return true;
+}
+
+void StepGenerator::s_peek_after_step() {
+  // The steps after this one, here (the axes peek after every step): a batch of those in
+  // its segment (next() takes them inline, sync_batch() moves the S-curve on to the last
+  // taken), or the next one alone, which next() takes through s_take_known().
+  SCurve& s = *s_.p;
+  const int n = walked_ ? 0 : s.batch(batch_.step, StepBatch::kSize);
+  if (n > 0) {
+    batch_.step[n] = kUnpeeked;
+    batch_.count = n;
+    batch_.pos = 0;
+    peeked_ = batch_.step[0];
+    return;
+  }
+  peeked_ = s.peek().value_or(kNoStep);
+}
+
+void StepGenerator::s_batch_state() {
+  // The S-curve moved on to the batch's last step taken; the peak of those steps kept.
+  s_peak_slope_ = s_peak_slope();
+  s_.p->take_batch(batch_.step, batch_.pos);
 }
 
 void StepGenerator::leave_s_curve(Tick at) {

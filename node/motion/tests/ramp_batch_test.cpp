@@ -3,7 +3,9 @@
 // (ramp_carry_walk.hpp), and the motion after a batch's step moved to lazily (take_known
 // moves the time, accumulator and level; sync_batch the interval's place). Held to the
 // level-by-level walk and to a generator that solves one step at a time (walk_ramps(): no
-// batch), after every step and across changes in the middle of a batch.
+// batch), after every step and across changes in the middle of a batch. The S-curve's
+// batches (SCurve::batch, found in doubles and proven by an error bound) are held to its
+// exact search the same way.
 #include <gtest/gtest.h>
 
 #include <optional>
@@ -93,10 +95,20 @@ TEST(CarryWalk, AWalkFromAGuessIsTheLevelWalksOrLeavesTheStepAlone) {
 }
 
 // A ramp as the generator batches them: a continuous slope on the HP channel's or the CiA
-// 402 profiles' grids, or a Horner module's (whole ticks per level, most steps in the
-// interval of the one before).
+// 402 profiles' grids, a Horner module's (whole ticks per level, most steps in the
+// interval of the one before), or a jerk-limited one (SCurve::batch; a jerk of 0 now and
+// then: that phase takes no time).
 RampSpec batched_ramp(std::mt19937_64& rng) {
-  const uint64_t kind = rng() % 3;
+  const uint64_t kind = rng() % 4;
+  if (kind == 3) {
+    const int64_t accel = pick(rng, 100, 400'000), decel = pick(rng, 100, 400'000);
+    RampSpec r = profile_ramp(pick(rng, 5, 40'000), accel, decel,
+                              profile_levels_per_hz(std::max(accel, decel)));
+    r.s_curve = true;
+    for (uint32_t& j : r.jerk)
+      j = rng() % 8 == 0 ? 0 : static_cast<uint32_t>(pick(rng, 1'000, 100'000'000));
+    return r;
+  }
   if (kind == 2) {
     const int64_t base = pick(rng, 1, 4'000);
     return horner_ramp(pick(rng, 20, 65'535), base, pick(rng, base + 1, 8'191),

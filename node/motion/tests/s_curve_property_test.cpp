@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -105,6 +106,57 @@ TEST(SCurveProperty, QuickSearchEqualsTheFullSearchOnEveryStep) {
   std::printf("%lld steps, %lld by the quick search, %lld of those at a constant velocity\n",
               static_cast<long long>(steps), static_cast<long long>(quick),
               static_cast<long long>(even));
+}
+
+// The batch (SCurve::batch: steps found in doubles, each proven by an error bound) from
+// random steps of the same moves: every step it gives on the full search's tick, and the
+// motion after a part of it taken (take_batch) going on with the full search's steps.
+TEST(SCurveProperty, ABatchHoldsTheFullSearchsNextSteps) {
+  std::mt19937_64 rng(20261206);
+  int64_t steps = 0, batched = 0, taken = 0;
+  for (int move = 0; move < 300; ++move) {
+    const JerkLimits l = random_limits(rng);
+    const std::optional<int64_t> distance =
+        rng() % 3 != 0 ? std::optional<int64_t>(1 + static_cast<int64_t>(rng() % 6000))
+                       : std::nullopt;
+    Pair p;
+    p.full.use_full_search();
+    p.quick.start(l, 0, distance);
+    p.full.start(l, 0, distance);
+    const int64_t change_at = static_cast<int64_t>(rng() % 4000);
+    Tick last = 0;
+    for (int64_t n = 0; n < 12'000; ++n) {
+      if (n == change_at) random_change(rng, p, last, l);
+      if (!distance && n == 6000) p.full.stop(last), p.quick.stop(last);
+      std::array<Tick, 32> out{};
+      const int k = rng() % 4 == 0 ? p.quick.batch(out.data(), 32) : 0;
+      if (k > 0) {
+        SCurve ahead = p.full;
+        for (int i = 0; i < k; ++i) {
+          ASSERT_EQ(out[i], ahead.next_step()) << "move " << move << " step " << n << "+" << i;
+          ASSERT_FALSE(ahead.ended()) << "a batch holds no motion's last step";
+        }
+        batched += k;
+        const int take = 1 + static_cast<int>(rng() % static_cast<uint64_t>(k));
+        p.quick.take_batch(out.data(), take);
+        for (int i = 0; i < take; ++i) p.full.next_step();
+        ASSERT_EQ(p.quick.steps(), p.full.steps());
+        ASSERT_EQ(p.quick.velocity(), p.full.velocity()) << "move " << move << " step " << n;
+        taken += take;
+        last = out[take - 1];
+        continue;
+      }
+      const std::optional<Tick> a = p.quick.next_step(), b = p.full.next_step();
+      ASSERT_EQ(a, b) << "move " << move << " step " << n + 1;
+      if (!a) break;
+      last = *a;
+      ++steps;
+    }
+    EXPECT_EQ(p.quick.end(), p.full.end()) << "move " << move;
+  }
+  EXPECT_GT(steps, 100'000);
+  EXPECT_GT(batched, 1'000'000) << batched;
+  EXPECT_GT(taken, 100'000) << taken;
 }
 
 // The constant-velocity path (s_curve_even.cpp) across the whole range of velocities: from
