@@ -5,17 +5,19 @@
 // (b1, b2 exact there), and the batch's n-th step (n from 0) is the smallest D with
 // rise(D) >= gap + n S. With every term kept relative to that one exact place, rise(D)
 // less the target is off in doubles by no more than ~14 roundings of
-//   M(D) = D (|b1| + D (|b2| + D |c3|)) + gap + n S
+//   M(D, n) = D (|b1| + D (|b2| + D |c3|)) + gap + n S
 // (the conversions of b1, b2, gap and S, two roundings each at most; three products and
-// three sums; the target's product and sum), under 2^-49 M. A step is taken where the
-// value at its tick is at least 2^-44 M above 0 and at the tick before at least that far
-// below: then the exact integers would say the same. The value moves by S / interval a
-// tick and M stays within ~33 S, so this leaves out about 4 steps in 10^8 at intervals of
-// 10^4 ticks: the batch ends there, and the exact search takes that step.
+// three sums; the target's product and sum), under 2^-49 M. M rises with D and n, so one
+// bound serves the whole batch: 2^-44 M at its reach (a tick no step of it passes) and
+// its last n. A step is taken where the value at its tick is at least that far above 0
+// and at the tick before at least that far below: then the exact integers would say the
+// same. The value moves by S / interval a tick and M stays within ~100 S, so this leaves
+// out about one step in 10^7 at intervals of 10^4 ticks: the batch ends there, and the
+// exact search takes that step.
 //
-// A step costs two evaluations of the cubic and the bound, no 128-bit product: the guess
-// comes from the last crossings (where the two before point), the crossing from the two
-// values (linear between the ticks), and Newton only where the guess missed its tick.
+// A step costs two evaluations of the cubic, no 128-bit product: the guess comes from the
+// last crossings (where the two before point), the crossing from the two values (linear
+// between the ticks), and Newton only where the guess missed its tick.
 #include <algorithm>
 #include <cmath>
 
@@ -43,16 +45,15 @@ struct Rise {
   }
 };
 
-// The step's tick after `last` from the guess `u` (below `room`): true with `c` the tick,
-// `above` and `below` the values at it and the tick before, where the bound makes that
-// certain. Inline: its results stay in registers.
-[[gnu::always_inline]] inline bool certain_step(const Rise& r, double target, Tick last,
-                                                double room, double u, Tick& c, double& above,
+// The step's tick after `last` from the guess `u` (below `reach`): true with `c` the tick,
+// `above` and `below` the values at it and the tick before, where the bound `e` (the
+// batch's, at its reach) makes that certain. Inline: its results stay in registers.
+[[gnu::always_inline]] inline bool certain_step(const Rise& r, double target, double e, Tick last,
+                                                double reach, double u, Tick& c, double& above,
                                                 double& below) {
-  if (!(u > -1 && u < room)) return false;           // NaN too
+  if (!(u > -1 && u < reach)) return false;          // NaN too
   c = std::max(last + 1, static_cast<Tick>(u + 1));  // ceil(u), or one more for a whole u
   const auto d = static_cast<double>(c);
-  const double e = r.bound(d, target);
   above = r.at(d) - target;
   below = r.at(d - 1) - target;
   return above >= e && below < -e;
@@ -88,8 +89,13 @@ int SCurve::batch(Tick* out, int most) const {
   const Rise r{b1, b2, b3, std::abs(b1), std::abs(b2), std::abs(b3)};
   const double gap = approx(l.gap);
   const Tick from = g.start + l.tau;
-  const auto room_d = static_cast<double>(room);
   double x = l.x, w = l.w, dw = l.dw;  // the last crossing (from `from`), interval, change
+  // One bound for the whole batch, the one at its furthest step (M rises with D and n):
+  // its steps within `reach` ticks, twice as far as the last interval points (a step
+  // beyond ends the batch), and within the segment.
+  const double most_d = most, room_d = static_cast<double>(room);
+  const double reach = std::min(room_d, std::floor(2 * (most_d + 1) * std::max(w, 1.0) + 64));
+  const double e = r.bound(reach, gap + most_d * kSd);
   Tick last = 0;
   int n = 0;
   double nd = 0;  // n
@@ -98,11 +104,11 @@ int SCurve::batch(Tick* out, int most) const {
     double u = x + w + dw;
     Tick c = 0;
     double above = 0, below = 0;
-    if (!certain_step(r, target, last, room_d, u, c, above, below)) [[unlikely]] {
+    if (!certain_step(r, target, e, last, reach, u, c, above, below)) [[unlikely]] {
       u = newton(r, target, u);
-      if (!certain_step(r, target, last, room_d, u, c, above, below)) break;
+      if (!certain_step(r, target, e, last, reach, u, c, above, below)) break;
     }
-    if (c > room) break;  // beyond the segment (the step before was its last tick)
+    if (static_cast<double>(c) > reach) break;  // beyond (the step before was at its end)
     const double crossing = static_cast<double>(c) - above / (above - below);
     const double interval = crossing - x;
     dw = interval - w;

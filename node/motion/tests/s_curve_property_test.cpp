@@ -115,7 +115,11 @@ TEST(SCurveProperty, ABatchHoldsTheFullSearchsNextSteps) {
   std::mt19937_64 rng(20261206);
   int64_t steps = 0, batched = 0, taken = 0;
   for (int move = 0; move < 300; ++move) {
-    const JerkLimits l = random_limits(rng);
+    JerkLimits l = random_limits(rng);
+    if (move % 5 == 0) {  // up to nearly a step per tick, with fast ramps
+      l.velocity *= 80;
+      l.acceleration *= 400, l.deceleration *= 400;
+    }
     const std::optional<int64_t> distance =
         rng() % 3 != 0 ? std::optional<int64_t>(1 + static_cast<int64_t>(rng() % 6000))
                        : std::nullopt;
