@@ -340,6 +340,7 @@ Tick StepGenerator::peek_run() {
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
   batch_.level0 = level;
+  batch_.bounded = false;
   return batch_.step[0];
 }
 
@@ -378,7 +379,12 @@ void StepGenerator::batch_state() {
   // its intervals moves the level by one, so the p levels passed since are p intervals
   // on, of which floor((rem + p·rho)/den) carried (ramp_intervals.hpp). At a constant
   // level (a run, a creep) p is 0.
-  acc_ = batch_.acc[batch_.pos - 1], level_ = batch_.level[batch_.pos - 1];
+  level_ = batch_.level[batch_.pos - 1];
+  if (batch_.bounded) {
+    bounded_batch_state();
+  } else {
+    acc_ = batch_.acc[batch_.pos - 1];
+  }
   const int64_t start = batch_.level0;
   const int64_t p = phase_ == MotionPhase::Accelerating ? level_ - start : start - level_;
   if (p > 0) {

@@ -10,6 +10,7 @@
 
 #include "node/motion/ramp.hpp"
 #include "node/motion/ramp_intervals.hpp"
+#include "node/motion/ramp_spread.hpp"
 #include "node/motion/s_curve.hpp"
 #include "node/motion/timebase.hpp"
 
@@ -161,6 +162,11 @@ class StepGenerator {
   Tick peek_batch(int64_t left, int64_t phase);
   template <int Dir>
   Tick solve_batch(int64_t left, int64_t phase, int64_t last, int64_t most);
+  // A ramp's steps found without its carries, each proven by their spread (ramp_spread.hpp;
+  // step_generator_bounded_batch.cpp); kUnpeeked where none is.
+  template <int Dir>
+  Tick bounded_batch(int64_t last, int64_t most);
+  void bounded_batch_state();
   int64_t batch_room() const;
   // Fills ramp_known_ if it is not; false where the cursor is not on the ramp's Z.
   bool know_ramp();
@@ -244,6 +250,11 @@ class StepGenerator {
     int64_t acc[kSize], level[kSize];
     int64_t level0 = 0;      // the level the batch began at
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
+    // A bounded batch keeps no accumulator (acc): where it began instead, the last step's
+    // tick and accumulator, its interval's end and the cursor's remainder.
+    bool bounded = false;
+    Tick t0 = 0, end0 = 0;
+    int64_t acc0 = 0, rem0 = 0;
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
     StepBatch() = default;
@@ -252,13 +263,15 @@ class StepGenerator {
       if (this == &o) return *this;
       level0 = o.level0, pos = o.pos, count = o.count;
       if (count == 0) return *this;
+      bounded = o.bounded, t0 = o.t0, end0 = o.end0, acc0 = o.acc0, rem0 = o.rem0;
       std::copy(o.step, o.step + o.count + 1, step);
-      std::copy(o.acc, o.acc + o.count, acc);
+      if (!bounded) std::copy(o.acc, o.acc + o.count, acc);
       std::copy(o.level, o.level + o.count, level);
       return *this;
     }
   };
   StepBatch batch_;
+  CarrySpread spread_;  // the current grid's (bounded_batch), counted once per grid
   // The motion to the last step taken from batch_, its steps counted in marks_, batch_
   // emptied (batch_state(), at the next peek() after its last step or a change).
   void sync_batch() {

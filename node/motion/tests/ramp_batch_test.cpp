@@ -8,6 +8,7 @@
 // exact search the same way.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <optional>
 #include <random>
 
@@ -114,10 +115,19 @@ RampSpec batched_ramp(std::mt19937_64& rng) {
     return horner_ramp(pick(rng, 20, 65'535), base, pick(rng, base + 1, 8'191),
                        pick(rng, 1, 27'300), pick(rng, 0, 27'300));
   }
+  // Half of them round (2^a 3^b 5^c, as kClockHz): grids whose residues repeat within
+  // kSpreadPeriodMost intervals, solved without their carries (bounded_batch).
+  const bool round = rng() % 2 == 0;
+  auto slope = [&](int64_t lo, int64_t hi) {
+    if (!round) return pick(rng, lo, hi);
+    int64_t v = 1;
+    while (v * 5 <= hi) v *= std::array<int64_t, 3>{2, 3, 5}[rng() % 3];
+    return std::max(lo, v);
+  };
   if (kind == 0)
     return frequency_ramp(pick(rng, 0, 50), pick(rng, 500, 40'000),
-                          pick(rng, 10'000'000, 2'000'000'000));
-  const int64_t accel = pick(rng, 2'000, 2'000'000), decel = pick(rng, 2'000, 2'000'000);
+                          slope(10'000'000, 2'000'000'000));
+  const int64_t accel = slope(2'000, 2'000'000), decel = slope(2'000, 2'000'000);
   return profile_ramp(pick(rng, 500, 40'000), accel, decel,
                       profile_levels_per_hz(std::max(accel, decel)));
 }
