@@ -41,10 +41,9 @@ template <int Dir>
 Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const IntervalGrid g = cursor_.grid();
   if (spread_.rho != g.rho || spread_.den != g.den) spread_ = carry_spread(g.rho, g.den);
-  // Not on a whole Z (rho 0: a Horner ramp, whose steps mostly fall in the interval of the
-  // step before, solve_batch's cheapest case), nor with a step's phase beyond doubles' whole
-  // numbers.
-  if (spread_.phase < 0 || g.rho == 0) return kUnpeeked;
+  // Not on a grid whose residues repeat too seldom to count, nor with a step's phase beyond
+  // doubles' whole numbers.
+  if (spread_.phase < 0) return kUnpeeked;
   const int64_t d = ramp_.phase_per_step, l0 = level_;
   if (d >= (int64_t{1} << 46)) return kUnpeeked;
   // The levels the batch may pass: the ramp's plain ones, at most a step per tick, and

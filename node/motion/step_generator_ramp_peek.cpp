@@ -99,9 +99,11 @@ Tick StepGenerator::peek_batch(int64_t left, int64_t phase) {
   if (!solves_in_64(ramp_.phase_per_step, std::max(level_, last), cursor_.grid())) return kUnpeeked;
   const int64_t most = batch_room();
   if (most <= 0) return kUnpeeked;
-  const Tick bounded =
-      ramp_known_.dir > 0 ? bounded_batch<1>(last, most) : bounded_batch<-1>(last, most);
-  if (bounded != kUnpeeked) return bounded;
+  if (cursor_.grid().rho > 0) {  // a whole Z (Horner's): solve_batch, its cheapest case
+    const Tick bounded =
+        ramp_known_.dir > 0 ? bounded_batch<1>(last, most) : bounded_batch<-1>(last, most);
+    if (bounded != kUnpeeked) return bounded;
+  }
   return ramp_known_.dir > 0 ? solve_batch<1>(left, phase, last, most)
                              : solve_batch<-1>(left, phase, last, most);
 }
