@@ -17,9 +17,11 @@
 // few thousand, as the levels are hundreds to thousands of phase units a tick and the
 // spread a few) the batch ends and the exact solve (solve_batch) takes that step.
 //
-// A step costs one division and a few products, however many carries its span holds. Its
+// A step costs a square root (its guess: Guess below), one division (J) and a few
+// products, however many carries its span holds, and waits for no other step. Its
 // accumulator is not kept: bounded_batch_state() finds the last taken step's exactly, with
-// the floor sum G, once for the batch.
+// the floor sum G, once for the batch. peek_batch() asks for it on grids that carry at
+// least every kBoundedCarries intervals; on sparser ones the walk is the faster.
 #include <algorithm>
 #include <cmath>
 
@@ -30,10 +32,37 @@ namespace stepnode::motion {
 namespace {
 
 // A step's tick from a real estimate `u` (ticks after t0) of where its phase is reached:
-// the tick after it, and after `last` (> 0 ticks after t0, as u is then).
+// the tick after it, and after `last` (>= 0 ticks after t0).
+// (A NaN, a ramp down's line ending before the target, or a guess beyond int64 gives the
+// tick after `last`: the tries from there find it, or end the batch.)
 Tick tick_after(double u, Tick last) {
-  return std::max(last + 1, static_cast<Tick>(std::max(u, 0.0)) + 1);
+  const auto ticks = static_cast<Tick>(u > 0 && u < 0x1p62 ? u : 0.0);
+  return std::max(last + 1, ticks + 1);
 }
+
+// Where the phase from t0 reaches `target` on the ramp's straight line (its interval ends
+// on E0 + (rem + j·num)/den exactly, the level half an interval on): the quadratic
+// alpha·P² + beta·P + gamma in P = ticks from t0 - E0 - rem/den, solved. Within a few
+// hundredths of a tick of the step's crossing on the profiles' grids (the line stays
+// within ~Z level-ticks of the staircase), and every step's its own: no step waits for
+// the one before (the steps' divisions overlap).
+struct Guess {
+  double alpha4, beta, beta2, gamma, shift, inv_l0, first, dir_z;
+  Guess(double l0, double e, double phi, double z, double k, int dir)
+      : alpha4(2 * dir / z),
+        beta(l0 + dir * ((phi - k) / z + 0.5)),
+        beta2(beta * beta),
+        gamma(l0 * (e + phi) + dir * (phi + z / 4 - k) / 2),
+        shift(e + phi),
+        inv_l0(1 / l0),
+        first(l0 * e),
+        dir_z(dir * z) {}
+  // Ticks from t0 (real): where the phase `target` is reached.
+  double at(double target) const {
+    if (target <= first) return target * inv_l0;  // in the interval the batch began in
+    return shift + (std::sqrt(beta2 + alpha4 * (target - gamma)) - beta) * dir_z;
+  }
+};
 
 }  // namespace
 
@@ -68,13 +97,14 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const double margin = spread_.phase + 0x1p-40 * 64 * static_cast<double>(d) + 1e-6;
   const auto l0d = static_cast<double>(l0);
   const double dd = static_cast<double>(d), acc0d = static_cast<double>(acc0);
-  const Tick e = e0 - t0;                        // ticks from t0 (c is t0 + c below)
-  double x = 0, w = (dd - acc0d) / l0d, dw = 0;  // the last crossing, interval, change
-  double target = dd - acc0d;                    // the step's phase from t0
+  const Tick e = e0 - t0;  // ticks from t0 (c is t0 + c below)
+  const Guess guess(l0d, static_cast<double>(e), static_cast<double>(rem) / g.den, half_z * 2, k,
+                    Dir);
+  double target = dd - acc0d;  // the step's phase from t0
   Tick prev = 0;
   int n = 0;
   for (; n < most; ++n, target += dd) {
-    Tick c = tick_after(x + w + dw, prev);
+    Tick c = tick_after(guess.at(target), prev);
     double over = 0;
     int64_t level = l0;
     bool found = false;
@@ -90,7 +120,7 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
       level = l0 + Dir * j;
       over = a - target;  // reached at c by this much (less: short of it)
       const auto ld = static_cast<double>(level);
-      if (over >= margin && over < ld - margin) {
+      if (over >= margin && over < ld - margin) [[likely]] {
         found = true;
         break;
       }
@@ -101,11 +131,6 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
       if (c <= prev) break;
     }
     if (!found) break;
-    const double crossing = static_cast<double>(c) - over / static_cast<double>(level);
-    const double interval = crossing - x;
-    dw = interval - w;
-    w = interval;
-    x = crossing;
     prev = c;
     batch_.step[n] = t0 + c, batch_.level[n] = level;
   }
