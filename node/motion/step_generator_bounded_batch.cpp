@@ -98,8 +98,8 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const auto l0d = static_cast<double>(l0);
   const double dd = static_cast<double>(d), acc0d = static_cast<double>(acc0);
   const Tick e = e0 - t0;  // ticks from t0 (c is t0 + c below)
-  const Guess guess(l0d, static_cast<double>(e), static_cast<double>(rem) / g.den, half_z * 2, k,
-                    Dir);
+  const Guess guess(l0d, static_cast<double>(e),
+                    static_cast<double>(rem) / static_cast<double>(g.den), half_z * 2, k, Dir);
   double target = dd - acc0d;  // the step's phase from t0
   Tick prev = 0;
   int n = 0;
