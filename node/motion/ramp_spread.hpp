@@ -23,8 +23,12 @@ struct CarrySpread {
   double phase = -1;          // the bound above; < 0: the period is too long to count
 };
 
-// The longest period counted (its cost a few additions an interval, once per grid).
-constexpr int64_t kSpreadPeriodMost = 4096;
+// The longest period counted: its cost is a few additions an interval, once per grid and
+// generator (16,384 intervals: ~100,000 instructions, ~25 us, in the peek after a ramp's
+// first step), where a longer one would hold up that step's peek more; such grids keep the
+// walk. A CiA 402 slope's period is accel·levels-per-Hz over its common factor with
+// kClockHz = 2^16·3·5^2 (100,000 steps/s^2 on 1 level per Hz: 125).
+constexpr int64_t kSpreadPeriodMost = 16384;
 
 // The spread of the grid's residues (rho >= 0, den > 0), counted over one period.
 CarrySpread carry_spread(int64_t rho, int64_t den);

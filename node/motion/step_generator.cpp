@@ -340,7 +340,7 @@ Tick StepGenerator::peek_run() {
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
   batch_.level0 = level;
-  batch_.bounded = false;
+  batch_.kept = StepBatch::Kept::Solved;
   return batch_.step[0];
 }
 
@@ -380,7 +380,7 @@ void StepGenerator::batch_state() {
   // on, of which floor((rem + p·rho)/den) carried (ramp_intervals.hpp). At a constant
   // level (a run, a creep) p is 0.
   level_ = batch_.level[batch_.pos - 1];
-  if (batch_.bounded) {
+  if (batch_.kept == StepBatch::Kept::Bounded) {
     bounded_batch_state();
   } else {
     acc_ = batch_.acc[batch_.pos - 1];

@@ -4,6 +4,7 @@
 // constant-velocity interval, so the cost is O(1) per step at any rate.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -254,9 +255,12 @@ class StepGenerator {
     int64_t acc[kSize], level[kSize];
     int64_t level0 = 0;      // the level the batch began at
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
-    // A bounded batch keeps no accumulator (acc): where it began instead, the last step's
-    // tick and accumulator, its interval's end and the cursor's remainder.
-    bool bounded = false;
+    // What it keeps of each step besides the time: its accumulator and level (solved: the
+    // walk's, peek_run's), its level alone (bounded: bounded_batch's, whose accumulator
+    // follows from where it began, below: the last step's tick and accumulator, its
+    // interval's end and the cursor's remainder), or nothing (an S-curve's).
+    enum class Kept : uint8_t { Solved, Bounded, Times };
+    Kept kept = Kept::Solved;
     Tick t0 = 0, end0 = 0;
     int64_t acc0 = 0, rem0 = 0;
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
@@ -267,15 +271,17 @@ class StepGenerator {
       if (this == &o) return *this;
       level0 = o.level0, pos = o.pos, count = o.count;
       if (count == 0) return *this;
-      bounded = o.bounded, t0 = o.t0, end0 = o.end0, acc0 = o.acc0, rem0 = o.rem0;
+      kept = o.kept, t0 = o.t0, end0 = o.end0, acc0 = o.acc0, rem0 = o.rem0;
       std::copy(o.step, o.step + o.count + 1, step);
-      if (!bounded) std::copy(o.acc, o.acc + o.count, acc);
-      std::copy(o.level, o.level + o.count, level);
+      if (kept == Kept::Solved) std::copy(o.acc, o.acc + o.count, acc);
+      if (kept != Kept::Times) std::copy(o.level, o.level + o.count, level);
       return *this;
     }
   };
   StepBatch batch_;
-  CarrySpread spread_;  // the current grid's (bounded_batch), counted once per grid
+  // The spreads of the ramp up's and the ramp down's grids (bounded_batch), each counted
+  // once for as long as its grid stays.
+  std::array<CarrySpread, 2> spreads_;
   // The motion to the last step taken from batch_, its steps counted in marks_, batch_
   // emptied (batch_state(), at the next peek() after its last step or a change).
   void sync_batch() {

@@ -69,19 +69,22 @@ struct Guess {
 template <int Dir>
 Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const IntervalGrid g = cursor_.grid();
-  if (spread_.rho != g.rho || spread_.den != g.den) spread_ = carry_spread(g.rho, g.den);
+  CarrySpread& spread = spreads_[Dir > 0 ? 0 : 1];  // the ramp up's grid, the ramp down's
+  if (spread.rho != g.rho || spread.den != g.den) spread = carry_spread(g.rho, g.den);
   // Not on a grid whose residues repeat too seldom to count, nor with a step's phase beyond
   // doubles' whole numbers.
-  if (spread_.phase < 0) return kUnpeeked;
+  if (spread.phase < 0) return kUnpeeked;
   const int64_t d = ramp_.phase_per_step, l0 = level_;
-  if (d >= (int64_t{1} << 46)) return kUnpeeked;
+  if (d >= (int64_t{1} << 46)) return kUnpeeked;  // (solves_in_64 keeps it below 2^29)
   // The levels the batch may pass: the ramp's plain ones, at most a step per tick, and
-  // few enough for the exact sum's 64-bit products (J²·(q + 1)·den below 2^61).
+  // few enough for bounded_batch_state's 64-bit products (J·(c - E0) <= J(J + 1)(q + 1)
+  // and the floor sum's rho·J + rem below den·(J + 1): both below 2^60).
   int64_t room = Dir * (last - l0);
   if (Dir < 0) room = std::min(room, l0 - 1);
   if (Dir > 0) room = std::min(room, d - l0);
-  const double wide = static_cast<double>(g.q + 1) * static_cast<double>(g.den);
-  room = std::min<int64_t>(room, static_cast<int64_t>(std::sqrt(0x1p61 / wide)));
+  room = std::min<int64_t>(room,
+                           static_cast<int64_t>(std::sqrt(0x1p60 / static_cast<double>(g.q + 1))));
+  room = std::min<int64_t>(room, (int64_t{1} << 60) / g.den - 1);
   if (room < 0) return kUnpeeked;
   const int64_t num = g.q * g.den + g.rho;  // Z·den: q, rho < 2^29 here, den < 2^32 below
   if (g.den >= (int64_t{1} << 32)) return kUnpeeked;
@@ -89,12 +92,11 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const int64_t rem = cursor_.remainder(), acc0 = acc_;
   // A(c) = L0·(c - t0) + Dir·J·((c - E0) - (J - 1)·Z/2 - k), k = (rem - mu)/den.
   const double half_z = cursor_.z() / 2;
-  const double mu =
-      static_cast<double>(rem % spread_.g) + static_cast<double>(g.den - spread_.g) / 2;
+  const double mu = static_cast<double>(rem % spread.g) + static_cast<double>(g.den - spread.g) / 2;
   const double k = (static_cast<double>(rem) - mu) / static_cast<double>(g.den);
   // The spread, and the doubles' error: every term is below ~64·d (the batch's phase and
   // its products), each off by a few roundings.
-  const double margin = spread_.phase + 0x1p-40 * 64 * static_cast<double>(d) + 1e-6;
+  const double margin = spread.phase + 0x1p-40 * 64 * static_cast<double>(d) + 1e-6;
   const auto l0d = static_cast<double>(l0);
   const double dd = static_cast<double>(d), acc0d = static_cast<double>(acc0);
   const Tick e = e0 - t0;  // ticks from t0 (c is t0 + c below)
@@ -140,7 +142,7 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
   batch_.level0 = l0;
-  batch_.bounded = true;
+  batch_.kept = StepBatch::Kept::Bounded;
   batch_.t0 = t0, batch_.end0 = e0, batch_.acc0 = acc0, batch_.rem0 = rem;
   return batch_.step[0];
 }

@@ -170,7 +170,7 @@ Tick StepGenerator::solve_batch(int64_t left, int64_t phase, int64_t last, int64
   batch_.step[n] = kUnpeeked;
   batch_.count = n;
   batch_.level0 = level_;
-  batch_.bounded = false;
+  batch_.kept = StepBatch::Kept::Solved;
   return batch_.step[0];
 }
 

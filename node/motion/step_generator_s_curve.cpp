@@ -168,7 +168,7 @@ void StepGenerator::s_peek_after_step() {
     batch_.step[n] = kUnpeeked;
     batch_.count = n;
     batch_.pos = 0;
-    batch_.bounded = false;
+    batch_.kept = StepBatch::Kept::Times;
     peeked_ = batch_.step[0];
     return;
   }

@@ -22,7 +22,7 @@ TEST(RampSpread, EveryPartialSumOfTheResiduesStaysWithinItAndOneReachesIt) {
   for (int grid = 0; grid < 400; ++grid) {
     // A period up to the longest counted, with a common factor now and then.
     const int64_t g = rng() % 3 == 0 ? pick(rng, 2, 50) : 1;
-    const int64_t period = pick(rng, 1, grid % 4 == 0 ? kSpreadPeriodMost : 300);
+    const int64_t period = pick(rng, 1, grid % 4 == 0 ? 4096 : 300);
     int64_t step = pick(rng, 0, period - 1);
     while (std::gcd(step, period) != 1) step = (step + 1) % period;  // period 1: step 0
     const int64_t rho = step * g, den = period * g;
@@ -63,7 +63,17 @@ TEST(RampSpread, EveryPartialSumOfTheResiduesStaysWithinItAndOneReachesIt) {
 TEST(RampSpread, APeriodBeyondTheLongestCountedHasNone) {
   EXPECT_LT(carry_spread(1, kSpreadPeriodMost + 1).phase, 0);
   EXPECT_GE(carry_spread(2, 2 * kSpreadPeriodMost).phase, 0);  // period kSpreadPeriodMost
-  EXPECT_EQ(carry_spread(0, 7).phase, 0);                      // a whole Z: one residue
+  // The longest period, against the residues' sums over two periods from a few starts.
+  const int64_t den = kSpreadPeriodMost, rho = 27'183;
+  const CarrySpread s = carry_spread(rho, den);
+  for (const int64_t rem : {int64_t{0}, int64_t{1}, den / 3, den - 1}) {
+    double sum = 0;
+    for (int64_t j = 0; j < 2 * den; ++j) {
+      sum += static_cast<double>((rem + j * rho) % den) - static_cast<double>(den - 1) / 2;
+      ASSERT_LE(std::abs(sum) / static_cast<double>(den), s.phase + 1e-9) << rem << " " << j;
+    }
+  }
+  EXPECT_EQ(carry_spread(0, 7).phase, 0);  // a whole Z: one residue
 }
 
 }  // namespace
