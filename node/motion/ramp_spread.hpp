@@ -24,7 +24,7 @@ struct CarrySpread {
 };
 
 // The longest period counted: its cost is a few additions an interval, once per grid and
-// generator (16,384 intervals: ~100,000 instructions, ~25 us, in the peek after a ramp's
+// generator (16,384 intervals: ~250,000 instructions, ~25 us, in the peek after a ramp's
 // first step), where a longer one would hold up that step's peek more; such grids keep the
 // walk. A CiA 402 slope's period is accel·levels-per-Hz over its common factor with
 // kClockHz = 2^16·3·5^2 (100,000 steps/s^2 on 1 level per Hz: 125).
