@@ -140,7 +140,7 @@ __int128 SCurve::peak_slope(const Tick* steps, int k) const {
   if (first >= 0 && last >= 0) return slope_at(steps[k - 1]);
   if (first <= 0 && last <= 0) return slope_at(steps[0]);
   if (g.c3 > 0) return std::max(slope_at(steps[0]), slope_at(steps[k - 1]));
-  int a = 0, b = k - 1;  // accel(a) > 0, accel(b) < 0
+  int a = 0, b = k - 1;  // accel(a) > 0, accel(b) <= 0
   while (b - a > 1) {
     const int m = a + (b - a) / 2;
     if (accel(m) > 0) {

@@ -94,8 +94,8 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   const double half_z = cursor_.z() / 2;
   const double mu = static_cast<double>(rem % spread.g) + static_cast<double>(g.den - spread.g) / 2;
   const double k = (static_cast<double>(rem) - mu) / static_cast<double>(g.den);
-  // The spread, and the doubles' error: every term is below ~64·d (the batch's phase and
-  // its products), each off by a few roundings.
+  // The spread, and the doubles' error: where A is near the target every term is within
+  // ~70·d (twice the batch's phase at most), each off by a few roundings: ~2^-49·d.
   const double margin = spread.phase + 0x1p-40 * 64 * static_cast<double>(d) + 1e-6;
   const auto l0d = static_cast<double>(l0);
   const double dd = static_cast<double>(d), acc0d = static_cast<double>(acc0);
