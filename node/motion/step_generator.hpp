@@ -257,12 +257,12 @@ class StepGenerator {
     int pos = 0, count = 0;  // count > 0: step[pos] is the next step (peeked_)
     // What it keeps of each step besides the time: its accumulator and level (solved: the
     // walk's, peek_run's), its level alone (bounded: bounded_batch's, whose accumulator
-    // follows from where it began, below: the last step's tick and accumulator, its
-    // interval's end and the cursor's remainder), or nothing (an S-curve's).
+    // follows from where it began: the tick t0 of the step before it, and the accumulator,
+    // interval end and cursor the generator keeps until sync_batch), or nothing (an
+    // S-curve's).
     enum class Kept : uint8_t { Solved, Bounded, Times };
     Kept kept = Kept::Solved;
-    Tick t0 = 0, end0 = 0;
-    int64_t acc0 = 0, rem0 = 0;
+    Tick t0 = 0;
     // A copy takes the entries in use alone: the hot path copies the generator (peek_unknown's
     // copy, a planner), most often with none.
     StepBatch() = default;
@@ -271,7 +271,7 @@ class StepGenerator {
       if (this == &o) return *this;
       level0 = o.level0, pos = o.pos, count = o.count;
       if (count == 0) return *this;
-      kept = o.kept, t0 = o.t0, end0 = o.end0, acc0 = o.acc0, rem0 = o.rem0;
+      kept = o.kept, t0 = o.t0;
       std::copy(o.step, o.step + o.count + 1, step);
       if (kept == Kept::Solved) std::copy(o.acc, o.acc + o.count, acc);
       if (kept != Kept::Times) std::copy(o.level, o.level + o.count, level);

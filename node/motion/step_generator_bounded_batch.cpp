@@ -75,7 +75,7 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   // doubles' whole numbers.
   if (spread.phase < 0) return kUnpeeked;
   const int64_t d = ramp_.phase_per_step, l0 = level_;
-  if (d >= (int64_t{1} << 46)) return kUnpeeked;  // (solves_in_64 keeps it below 2^29)
+  // (peek_batch's solves_in_64 keeps d below 2^29: the targets below stay whole in doubles.)
   // The levels the batch may pass: the ramp's plain ones, at most a step per tick, and
   // few enough for bounded_batch_state's 64-bit products (J·(c - E0) <= J(J + 1)(q + 1)
   // and the floor sum's rho·J + rem below den·(J + 1): both below 2^60).
@@ -143,7 +143,7 @@ Tick StepGenerator::bounded_batch(int64_t last, int64_t most) {
   batch_.count = n;
   batch_.level0 = l0;
   batch_.kept = StepBatch::Kept::Bounded;
-  batch_.t0 = t0, batch_.end0 = e0, batch_.acc0 = acc0, batch_.rem0 = rem;
+  batch_.t0 = t0;
   return batch_.step[0];
 }
 
@@ -152,14 +152,16 @@ template Tick StepGenerator::bounded_batch<-1>(int64_t last, int64_t most);
 
 void StepGenerator::bounded_batch_state() {
   // The accumulator at the last step taken, t_ (its level already in level_): the exact
-  // Phi above with the floor sum G, less a step's phase for each step taken.
+  // Phi above with the floor sum G, less a step's phase for each step taken. acc_,
+  // interval_end_ and the cursor still stand where the batch began (batch_state moves
+  // them after this).
   const IntervalGrid g = cursor_.grid();
   const int64_t dir = phase_ == MotionPhase::Accelerating ? 1 : -1;
   const int64_t j = dir * (level_ - batch_.level0);
-  const int64_t sum = floor_sum<int64_t>(j, g.den, g.rho, batch_.rem0);
+  const int64_t sum = floor_sum<int64_t>(j, g.den, g.rho, cursor_.remainder());
   const int64_t phi = batch_.level0 * (t_ - batch_.t0) +
-                      dir * (j * (t_ - batch_.end0) - g.q * (j * (j - 1) / 2) - sum);
-  acc_ = batch_.acc0 + phi - ramp_.phase_per_step * batch_.pos;
+                      dir * (j * (t_ - interval_end_) - g.q * (j * (j - 1) / 2) - sum);
+  acc_ += phi - ramp_.phase_per_step * batch_.pos;
 }
 
 }  // namespace stepnode::motion

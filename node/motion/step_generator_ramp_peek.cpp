@@ -96,14 +96,14 @@ Tick StepGenerator::peek_batch(int64_t left, int64_t phase) {
   // kUnpeeked: the step is found alone.
   if (!know_ramp() || ramp_known_.steep) return kUnpeeked;
   const int64_t last = ramp_known_.last;
-  if (!solves_in_64(ramp_.phase_per_step, std::max(level_, last), cursor_.grid())) return kUnpeeked;
+  const IntervalGrid g = cursor_.grid();
+  if (!solves_in_64(ramp_.phase_per_step, std::max(level_, last), g)) return kUnpeeked;
   const int64_t most = batch_room();
   if (most <= 0) return kUnpeeked;
   // Without its carries on a grid that carries at least every kBoundedCarries intervals
   // (CiA 402's usual grids: two or three in each step's span). Fewer (HP's usual grid, a
   // carry every 24 intervals; a whole Z, Horner's, none): solve_batch's walk, whose
   // additions take less time than the bounded step's square root and division.
-  const IntervalGrid g = cursor_.grid();
   if (g.rho > 0 && g.den <= kBoundedCarries * g.rho) {
     const Tick bounded =
         ramp_known_.dir > 0 ? bounded_batch<1>(last, most) : bounded_batch<-1>(last, most);
